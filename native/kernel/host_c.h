@@ -1,0 +1,70 @@
+/* Knitshade kernel: host adaptation for C99 and C++17.
+ *
+ * The kernel headers in this folder are written once in a subset of C that
+ * `oslc` also accepts (see docs/kernel-subset.md). They never include system
+ * headers and never name a host type directly; they go through the macros
+ * below. `osl/knit_osl_host.h` defines the same macros for OSL.
+ *
+ *   KNIT_FN               qualifier of every kernel function
+ *   KNIT_STRUCT(Name)     opens a struct declaration, KNIT_STRUCT_END(Name) closes it
+ *   KNIT_ARRAY(T, name)   a read-only array parameter of unknown length
+ *   kvec3, kv3(x,y,z)     3-vector type and constructor; KX/KY/KZ component access
+ *   KF(x)                 a float literal (C: single precision, no double promotion)
+ *   KINT(x), KFLT(i)      conversions
+ *   k_sqrt ... k_cbrt     scalar maths on float
+ */
+#ifndef KNIT_KERNEL_HOST_C_H
+#define KNIT_KERNEL_HOST_C_H
+
+#include <math.h>
+
+#ifdef __cplusplus
+#define KNIT_FN static inline
+#else
+#define KNIT_FN static inline
+#endif
+
+#define KNIT_STRUCT(Name) typedef struct Name {
+#define KNIT_STRUCT_END(Name) } Name;
+#define KNIT_ARRAY(T, name) const T *name
+
+typedef struct kvec3 {
+  float x, y, z;
+} kvec3;
+
+KNIT_FN kvec3 kv3(float x, float y, float z) {
+  kvec3 v;
+  v.x = x;
+  v.y = y;
+  v.z = z;
+  return v;
+}
+
+#define KX(v) ((v).x)
+#define KY(v) ((v).y)
+#define KZ(v) ((v).z)
+
+#define KF(x) ((float)(x))
+#define KINT(x) ((int)(x))
+#define KFLT(i) ((float)(i))
+
+#define k_sqrt(x) sqrtf(x)
+#define k_sin(x) sinf(x)
+#define k_cos(x) cosf(x)
+#define k_tan(x) tanf(x)
+#define k_acos(x) acosf(x)
+#define k_asin(x) asinf(x)
+#define k_atan(x) atanf(x)
+#define k_atan2(y, x) atan2f(y, x)
+#define k_exp(x) expf(x)
+#define k_log(x) logf(x)
+#define k_pow(x, y) powf(x, y)
+#define k_floor(x) floorf(x)
+#define k_ceil(x) ceilf(x)
+#define k_fabs(x) fabsf(x)
+#define k_cbrt(x) cbrtf(x)
+#define k_fmin(a, b) fminf(a, b)
+#define k_fmax(a, b) fmaxf(a, b)
+#define k_isfinite(x) isfinite(x)
+
+#endif /* KNIT_KERNEL_HOST_C_H */

@@ -1,0 +1,56 @@
+/* Knitshade kernel: small vector and scalar maths shared by every kernel file.
+ * Kernel subset (docs/kernel-subset.md): no pointers, no overloading. */
+#ifndef KNIT_KERNEL_KMATH_H
+#define KNIT_KERNEL_KMATH_H
+
+#define K_PI KF(3.14159265358979323846)
+#define K_2PI KF(6.28318530717958647692)
+#define K_PI_2 KF(1.57079632679489661923)
+#define K_PI_4 KF(0.78539816339744830962)
+#define K_INV_PI KF(0.31830988618379067154)
+#define K_BIG KF(1.0e30)
+
+KNIT_FN float k_sqr(float x) { return x * x; }
+KNIT_FN float k_clampf(float x, float lo, float hi) { return k_fmin(k_fmax(x, lo), hi); }
+KNIT_FN float k_safe_sqrt(float x) { return k_sqrt(k_fmax(x, KF(0.0))); }
+KNIT_FN float k_safe_acos(float x) { return k_acos(k_clampf(x, KF(-1.0), KF(1.0))); }
+KNIT_FN float k_safe_asin(float x) { return k_asin(k_clampf(x, KF(-1.0), KF(1.0))); }
+KNIT_FN float k_signf(float x) { return x < KF(0.0) ? KF(-1.0) : KF(1.0); }
+KNIT_FN float k_lerp(float a, float b, float t) { return a + (b - a) * t; }
+KNIT_FN int k_mini(int a, int b) { return a < b ? a : b; }
+KNIT_FN int k_maxi(int a, int b) { return a > b ? a : b; }
+
+/* Floor-modulo for integers: result in [0, n) for n > 0, also for negative a. */
+KNIT_FN int k_modi(int a, int n) {
+  int m = a % n;
+  return m < 0 ? m + n : m;
+}
+
+KNIT_FN kvec3 kv3_add(kvec3 a, kvec3 b) { return kv3(KX(a) + KX(b), KY(a) + KY(b), KZ(a) + KZ(b)); }
+KNIT_FN kvec3 kv3_sub(kvec3 a, kvec3 b) { return kv3(KX(a) - KX(b), KY(a) - KY(b), KZ(a) - KZ(b)); }
+KNIT_FN kvec3 kv3_scale(kvec3 a, float s) { return kv3(KX(a) * s, KY(a) * s, KZ(a) * s); }
+KNIT_FN kvec3 kv3_mul(kvec3 a, kvec3 b) { return kv3(KX(a) * KX(b), KY(a) * KY(b), KZ(a) * KZ(b)); }
+KNIT_FN kvec3 kv3_madd(kvec3 a, kvec3 b, float s) {
+  return kv3(KX(a) + KX(b) * s, KY(a) + KY(b) * s, KZ(a) + KZ(b) * s);
+}
+KNIT_FN kvec3 kv3_neg(kvec3 a) { return kv3(-KX(a), -KY(a), -KZ(a)); }
+KNIT_FN float kv3_dot(kvec3 a, kvec3 b) { return KX(a) * KX(b) + KY(a) * KY(b) + KZ(a) * KZ(b); }
+KNIT_FN kvec3 kv3_cross(kvec3 a, kvec3 b) {
+  return kv3(KY(a) * KZ(b) - KZ(a) * KY(b), KZ(a) * KX(b) - KX(a) * KZ(b), KX(a) * KY(b) - KY(a) * KX(b));
+}
+KNIT_FN float kv3_len2(kvec3 a) { return kv3_dot(a, a); }
+KNIT_FN float kv3_len(kvec3 a) { return k_sqrt(kv3_dot(a, a)); }
+KNIT_FN kvec3 kv3_normalize(kvec3 a) {
+  float l = kv3_len(a);
+  return l > KF(0.0) ? kv3_scale(a, KF(1.0) / l) : kv3(KF(0.0), KF(0.0), KF(1.0));
+}
+KNIT_FN kvec3 kv3_lerp(kvec3 a, kvec3 b, float t) { return kv3_add(a, kv3_scale(kv3_sub(b, a), t)); }
+/* Components of v in the orthonormal frame (t, b, n). */
+KNIT_FN kvec3 kv3_to_local(kvec3 v, kvec3 t, kvec3 b, kvec3 n) {
+  return kv3(kv3_dot(v, t), kv3_dot(v, b), kv3_dot(v, n));
+}
+KNIT_FN kvec3 kv3_from_local(kvec3 v, kvec3 t, kvec3 b, kvec3 n) {
+  return kv3_add(kv3_add(kv3_scale(t, KX(v)), kv3_scale(b, KY(v))), kv3_scale(n, KZ(v)));
+}
+
+#endif /* KNIT_KERNEL_KMATH_H */

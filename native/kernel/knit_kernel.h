@@ -1,0 +1,10 @@
+/* Knitshade kernel: every shared kernel header, in dependency order.
+ * A host includes its adaptation header (host_c.h, or osl/knit_osl_host.h)
+ * first, then this file. */
+#ifndef KNIT_KERNEL_H
+#define KNIT_KERNEL_H
+
+#include "kmath.h"
+#include "cubic.h"
+
+#endif /* KNIT_KERNEL_H */

@@ -1,0 +1,8 @@
+// One function per area of the Python module, each in bind_<area>.cpp.
+#pragma once
+#include <pybind11/pybind11.h>
+
+namespace knit::py {
+void bind_pattern(pybind11::module_& m);   // bind_pattern.cpp
+void bind_geometry(pybind11::module_& m);  // bind_geometry.cpp
+}  // namespace knit::py

@@ -1,0 +1,61 @@
+#!/usr/bin/env python3
+"""Rejects C constructs in the shared kernel that OSL would not accept.
+
+Usage: lint_subset.py KERNEL_DIR
+Checks every *.h in KERNEL_DIR except the C host adaptation header
+(host_c.h). See docs/kernel-subset.md for the rules. Exits 1 and prints
+file:line: rule for each violation; prints a summary either way.
+"""
+import pathlib
+import re
+import sys
+
+RULES = [
+    (r"\bdouble\b", "no double (OSL has only float)"),
+    (r"\b(unsigned|long|short|char|bool|enum|union|typedef|sizeof|goto|switch|case|do)\b",
+     "keyword outside the kernel subset"),
+    (r"\b(class|template|typename|namespace|using|new|delete|operator|auto|constexpr|"
+     r"nullptr|static_cast|reinterpret_cast|const_cast)\b", "C++-only construct"),
+    (r"->", "no pointers"),
+    (r"\b(float|int|kvec3|K[A-Z]\w*)\s*\*\s*\w+\s*[,;=)\[]", "no pointer declarations"),
+    (r"\(\s*(float|int|kvec3)\s*\*\s*\)", "no pointer casts"),
+    (r"&\s*[A-Za-z_]\w*\s*[,)]", "no address-of / references"),
+    (r"#\s*include\s*<", "no system includes in the kernel"),
+    (r"\b(sqrtf|sinf|cosf|tanf|expf|logf|powf|fabsf|floorf|ceilf|atan2f|acosf|asinf|"
+     r"cbrtf|fminf|fmaxf|sqrt|sin|cos|exp|log|pow|fabs|floor|ceil|atan2|acos|asin|cbrt|"
+     r"fmin|fmax|isfinite|isnan)\s*\(", "call maths through the k_* macros"),
+    (r"\bstd::", "no std::"),
+    (r"\bstatic\b", "no static (state or qualifiers); use KNIT_FN"),
+    (r"\bconst\b", "no const qualifiers (OSL has none); use KNIT_ARRAY for array params"),
+    (r"[0-9]\.[0-9]*f\b|[0-9]f\b", "write float literals as KF(x)"),
+]
+
+STRIP_COMMENTS = re.compile(r"/\*.*?\*/|//[^\n]*", re.S)
+
+
+def strip(text):
+    # Replace comments with blanks but keep newlines so line numbers stay right.
+    return STRIP_COMMENTS.sub(lambda m: re.sub(r"[^\n]", " ", m.group(0)), text)
+
+
+def main():
+    root = pathlib.Path(sys.argv[1])
+    files = sorted(p for p in root.glob("*.h") if p.name != "host_c.h")
+    if not files:
+        print(f"lint_subset: no kernel headers under {root}")
+        return 1
+    bad = 0
+    for path in files:
+        for lineno, line in enumerate(strip(path.read_text()).splitlines(), 1):
+            if line.lstrip().startswith("#") and "include" not in line:
+                continue  # preprocessor lines (macros) are host-neutral
+            for pattern, why in RULES:
+                if re.search(pattern, line):
+                    print(f"{path}:{lineno}: {why}: {line.strip()}")
+                    bad += 1
+    print(f"lint_subset: {len(files)} kernel headers, {bad} violation(s)")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
