@@ -1,0 +1,116 @@
+// KnitSurface: a pattern plus stitch parameters, queried analytically.
+//
+// Pattern space (docs/geometry.md): x along the course, y along the wale, z out
+// of the fabric, in stitch-curve units. UV maps to pattern space by
+// x = uv_scale * u, y = uv_scale * v (isotropic, so loops stay round). The
+// fabric's base surface is z = 0; yarn tubes live in |z| <= shell_top().
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "knit/kernel.h"
+#include "knit/params.h"
+#include "knit/pattern.h"
+
+namespace knit {
+
+using Vec3 = k::kvec3;
+
+// One crossing of a line with one yarn tube.
+struct TubeCrossing {
+  float s_in = 0, s_out = 0;  // distances along the line (entry, exit)
+  Vec3 p_in{}, normal{}, tangent{};  // entry point, outward normal, unit yarn tangent
+  int row = 0, col = 0;       // cell of the yarn piece (row from the bottom, unwrapped)
+  int stitch = 0, color = 0;  // code and colour index of that cell
+  int layer = 0;              // row parity: 0 or 1
+  float t = 0;                // curve parameter of the entry point
+};
+
+// Result of a vertical query or a CAPM march.
+struct SurfaceHit {
+  bool hit = false;
+  Vec3 position{};   // pattern space
+  Vec3 normal{};     // outward tube normal (pattern space, unit)
+  Vec3 tangent{};    // yarn tangent (unit)
+  int layers = 0;    // tubes crossed by the vertical line through the hit point
+  int row = 0, col = 0, stitch = 0, color = 0;
+  int steps = 0;     // CAPM segments marched
+};
+
+// Base-mesh frame at a pattern-space point, for CAPM's ray bending. The
+// frame's axes are world directions: t along +x (u), b along +y (v), n the
+// surface normal; an orthonormal frame is expected.
+class FrameProvider {
+ public:
+  virtual ~FrameProvider() = default;
+  virtual void frame(float x, float y, Vec3& t, Vec3& b, Vec3& n) const = 0;
+};
+
+class FlatFrame final : public FrameProvider {
+ public:
+  void frame(float, float, Vec3& t, Vec3& b, Vec3& n) const override;
+};
+
+// A cylinder of radius R (pattern units) around the y axis: x is arc length
+// around it, y runs along the axis. The CAPM test case of the paper's Fig. 6/7.
+class CylinderFrame final : public FrameProvider {
+ public:
+  explicit CylinderFrame(float radius) : radius_(radius) {}
+  void frame(float x, float y, Vec3& t, Vec3& b, Vec3& n) const override;
+  float radius() const { return radius_; }
+
+ private:
+  float radius_;
+};
+
+// A sphere of radius R (pattern units): x = R * longitude, y = R * latitude.
+class SphereFrame final : public FrameProvider {
+ public:
+  explicit SphereFrame(float radius) : radius_(radius) {}
+  void frame(float x, float y, Vec3& t, Vec3& b, Vec3& n) const override;
+  float radius() const { return radius_; }
+
+ private:
+  float radius_;
+};
+
+struct CapmOptions {
+  int max_steps = 32;         // hard cap on marched segments
+  float max_segment = 6.2832f;  // longest segment, in pattern units of horizontal travel
+};
+
+class KnitSurface {
+ public:
+  KnitSurface(Pattern pattern, StitchParams params);  // validates params
+
+  const Pattern& pattern() const { return pattern_; }
+  const StitchParams& params() const { return params_; }
+  float shell_top() const;  // highest z any tube reaches (|d| + r; more with floats)
+  float cell_width() const;   // 2 pi
+  float cell_height() const;  // row spacing
+  float period_x() const;     // cell_width * cols
+  float period_y() const;     // cell_height * rows
+
+  // Every tube crossed by the vertical line through (x, y), from the top down.
+  std::vector<TubeCrossing> crossings(float x, float y) const;
+  // The first tube surface seen from above at (x, y) (paper's height query).
+  SurfaceHit query(float x, float y) const;
+  // CAPM (paper Alg. 1, Sec. 4.2/6.1): the ray enters the shell at
+  // (x, y, shell_top()) travelling along -wi_local (wi_local.z > 0, pointing
+  // to the viewer, in the frame at (x, y)); `frame` bends it (flat if null).
+  SurfaceHit capm(float x, float y, Vec3 wi_local, const FrameProvider* frame = nullptr,
+                  const CapmOptions& opt = {}) const;
+
+  // The kernel's view of this surface (for hosts that call the kernel directly).
+  const k::KnitGeom& geom() const { return geom_; }
+  const int32_t* codes() const { return pattern_.codes().data(); }
+  const int32_t* colors() const { return pattern_.colors_or_zero().data(); }
+
+ private:
+  Pattern pattern_;
+  StitchParams params_;
+  k::KnitGeom geom_;
+};
+
+}  // namespace knit
