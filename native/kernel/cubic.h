@@ -25,7 +25,8 @@ KNIT_FN KRoots kroots_none(void) {
   return r;
 }
 
-KNIT_FN KRoots kroots_sort(KRoots r) {
+KNIT_FN KRoots kroots_sort(KRoots in) {
+  KRoots r = in;
   float t;
   if (r.n >= 2 && r.r1 < r.r0) { t = r.r0; r.r0 = r.r1; r.r1 = t; }
   if (r.n == 3) {
@@ -58,6 +59,7 @@ KNIT_FN KRoots solve_quadratic(float a, float b, float c) {
 }
 
 KNIT_FN float cubic_newton(float a3, float a2, float a1, float a0, float x) {
+  /* x is only read: OSL passes parameters by reference */
   float f = ((a3 * x + a2) * x + a1) * x + a0;
   float df = (KF(3.0) * a3 * x + KF(2.0) * a2) * x + a1;
   if (df != KF(0.0)) {

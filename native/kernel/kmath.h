@@ -45,12 +45,12 @@ KNIT_FN kvec3 kv3_normalize(kvec3 a) {
   return l > KF(0.0) ? kv3_scale(a, KF(1.0) / l) : kv3(KF(0.0), KF(0.0), KF(1.0));
 }
 KNIT_FN kvec3 kv3_lerp(kvec3 a, kvec3 b, float t) { return kv3_add(a, kv3_scale(kv3_sub(b, a), t)); }
-/* Components of v in the orthonormal frame (t, b, n). */
-KNIT_FN kvec3 kv3_to_local(kvec3 v, kvec3 t, kvec3 b, kvec3 n) {
-  return kv3(kv3_dot(v, t), kv3_dot(v, b), kv3_dot(v, n));
+/* Components of w in the orthonormal frame (t, b, n). */
+KNIT_FN kvec3 kv3_to_local(kvec3 w, kvec3 t, kvec3 b, kvec3 n) {
+  return kv3(kv3_dot(w, t), kv3_dot(w, b), kv3_dot(w, n));
 }
-KNIT_FN kvec3 kv3_from_local(kvec3 v, kvec3 t, kvec3 b, kvec3 n) {
-  return kv3_add(kv3_add(kv3_scale(t, KX(v)), kv3_scale(b, KY(v))), kv3_scale(n, KZ(v)));
+KNIT_FN kvec3 kv3_from_local(kvec3 w, kvec3 t, kvec3 b, kvec3 n) {
+  return kv3_add(kv3_add(kv3_scale(t, KX(w)), kv3_scale(b, KY(w))), kv3_scale(n, KZ(w)));
 }
 
 #endif /* KNIT_KERNEL_KMATH_H */

@@ -6,5 +6,8 @@
 
 #include "kmath.h"
 #include "cubic.h"
+#include "stitch.h"
+#include "query.h"
+#include "capm.h"
 
 #endif /* KNIT_KERNEL_H */

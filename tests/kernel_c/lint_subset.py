@@ -28,7 +28,42 @@ RULES = [
     (r"\bstatic\b", "no static (state or qualifiers); use KNIT_FN"),
     (r"\bconst\b", "no const qualifiers (OSL has none); use KNIT_ARRAY for array params"),
     (r"[0-9]\.[0-9]*f\b|[0-9]f\b", "write float literals as KF(x)"),
+    (r"\b(float|int|kvec3|K[A-Z]\w*)\s+(u|v|P|N|I|Ng|Ci|Ps|time|dtime|dPdu|dPdv|dPdtime)\s*[,;=)\[]",
+     "name reserved in OSL (a shader global)"),
 ]
+
+FUNC = re.compile(r"KNIT_FN\s+\w+\s+(\w+)\s*\((.*?)\)\s*\{", re.S)
+
+
+def param_writes(text):
+    """OSL passes parameters by reference: a kernel function must never assign
+    to one. Yields (line, function, parameter) for each assignment found."""
+    for m in FUNC.finditer(text):
+        params = []
+        for part in re.split(r",(?![^(]*\))", m.group(2)):
+            part = part.strip()
+            am = re.match(r"KNIT_ARRAY\(\s*\w+\s*,\s*(\w+)\s*\)", part)
+            if am:
+                params.append(am.group(1))
+            elif part and part != "void":
+                params.append(part.split()[-1])
+        # Function body: match braces from the opening one.
+        depth, i = 0, m.end() - 1
+        while i < len(text):
+            if text[i] == "{":
+                depth += 1
+            elif text[i] == "}":
+                depth -= 1
+                if depth == 0:
+                    break
+            i += 1
+        body = text[m.end():i]
+        for p in params:
+            target = (r"(?:(?<![\w.])" + re.escape(p) + r"(?:\s*\[[^\]]*\])?(?:\.\w+)?"
+                      r"|K[XYZ]\(\s*" + re.escape(p) + r"\s*\))")
+            for w in re.finditer(target + r"\s*([-+*/]?=)(?!=)", body):
+                line = text.count("\n", 0, m.end() + w.start()) + 1
+                yield line, m.group(1), p
 
 STRIP_COMMENTS = re.compile(r"/\*.*?\*/|//[^\n]*", re.S)
 
@@ -53,6 +88,10 @@ def main():
                 if re.search(pattern, line):
                     print(f"{path}:{lineno}: {why}: {line.strip()}")
                     bad += 1
+        for lineno, fn, p in param_writes(strip(path.read_text())):
+            print(f"{path}:{lineno}: {fn} assigns to its parameter '{p}' "
+                  "(OSL passes parameters by reference; copy it to a local)")
+            bad += 1
     print(f"lint_subset: {len(files)} kernel headers, {bad} violation(s)")
     return 1 if bad else 0
 

@@ -45,6 +45,9 @@ class FrameProvider {
  public:
   virtual ~FrameProvider() = default;
   virtual void frame(float x, float y, Vec3& t, Vec3& b, Vec3& n) const = 0;
+  // Normal curvature along x and y (1/pattern units, > 0 convex) for CAPM's
+  // metric correction; {0, 0, 0} when unknown.
+  virtual Vec3 curvature(float /*x*/, float /*y*/) const { return {0, 0, 0}; }
 };
 
 class FlatFrame final : public FrameProvider {
@@ -58,6 +61,7 @@ class CylinderFrame final : public FrameProvider {
  public:
   explicit CylinderFrame(float radius) : radius_(radius) {}
   void frame(float x, float y, Vec3& t, Vec3& b, Vec3& n) const override;
+  Vec3 curvature(float, float) const override { return {1.0f / radius_, 0, 0}; }
   float radius() const { return radius_; }
 
  private:
@@ -69,6 +73,7 @@ class SphereFrame final : public FrameProvider {
  public:
   explicit SphereFrame(float radius) : radius_(radius) {}
   void frame(float x, float y, Vec3& t, Vec3& b, Vec3& n) const override;
+  Vec3 curvature(float, float) const override { return {1.0f / radius_, 1.0f / radius_, 0}; }
   float radius() const { return radius_; }
 
  private:

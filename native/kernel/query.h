@@ -1,0 +1,265 @@
+/* Knitshade kernel: O(1) analytic intersection of a line with the yarn tubes.
+ *
+ * Paper Sec. 4.1, Eq. 3-4: the closest approach of a line R(s) = o + s D and a
+ * yarn curve Y(t). Eliminating s leaves the distance from Y(t) to the line,
+ * which is the distance in the plane perpendicular to D. On each curve piece
+ * (pi/4 of t, see stitch.h) Y is replaced by its quadratic interpolant, so the
+ * squared distance is a quartic in t and its stationary points are the roots
+ * of a cubic, solved in closed form (cubic.h).
+ *
+ * That closest point is not where the line enters the tube. The tube is the
+ * union of the balls of radius r centred on the curve, so along the line the
+ * tube occupies [min_t (s(t) - w(t)), max_t (s(t) + w(t))] with
+ * s(t) = (Y(t) - o).D and w(t) = sqrt(r^2 - rho(t)^2), rho the distance to the
+ * line. Entry and exit are therefore maximisers of -s + w and s + w, not the
+ * closest point plus sqrt(r^2 - rho^2) (the paper's construction, wrong where
+ * the yarn slopes along the line). Both are found by safeguarded Newton steps
+ * on the exact curve, started from the cubic's root after one Newton step on
+ * the exact distance. The outward normal at the entry point p is
+ * (p - Y(t_in)) / r, exact for the ball-swept tube.
+ *
+ * Work per line is bounded: the rows and pieces whose bounds come within r of
+ * the line's bounding box (at most a few rows and ~8 pieces per row for a line
+ * segment no longer than one stitch horizontally). */
+#ifndef KNIT_KERNEL_QUERY_H
+#define KNIT_KERNEL_QUERY_H
+
+#define KNIT_NEWTON_CLOSEST 1  /* Newton steps on the distance before the extremes */
+#define KNIT_NEWTON_EXTREME 3  /* Newton steps for each of entry and exit */
+
+/* Result of a line query: the first tube entry with s in [s_min, s_max]. */
+KNIT_STRUCT(KnitLineHit)
+  int hit;        /* 1 when an entry lies in [s_min, s_max] */
+  int crossings;  /* tube crossings overlapping [s_min, s_max] */
+  float s_in, s_out; /* entry and exit distances of the first crossing */
+  float t;        /* curve parameter of the entry point */
+  kvec3 p;        /* entry point, pattern space */
+  kvec3 n;        /* outward tube normal at p */
+  kvec3 tangent;  /* unit yarn tangent at Y(t) */
+  int row, col;   /* cell owning the curve point (row from the bottom, unwrapped) */
+  int code, color;
+KNIT_STRUCT_END(KnitLineHit)
+
+KNIT_FN KnitLineHit knit_line_hit_none(void) {
+  KnitLineHit h;
+  h.hit = 0;
+  h.crossings = 0;
+  h.s_in = K_BIG;
+  h.s_out = K_BIG;
+  h.t = KF(0.0);
+  h.p = kv3(KF(0.0), KF(0.0), KF(0.0));
+  h.n = kv3(KF(0.0), KF(0.0), KF(1.0));
+  h.tangent = kv3(KF(1.0), KF(0.0), KF(0.0));
+  h.row = 0;
+  h.col = 0;
+  h.code = 0;
+  h.color = 0;
+  return h;
+}
+
+/* Segment [pa, pb] against an axis-aligned box (slab test). */
+KNIT_FN int knit_segment_box(kvec3 pa, kvec3 pb, KBox b) {
+  float t0 = KF(0.0), t1 = KF(1.0);
+  kvec3 dv = kv3_sub(pb, pa);
+  float da[3], lo[3], hi[3], pv[3];
+  int i;
+  da[0] = KX(dv); da[1] = KY(dv); da[2] = KZ(dv);
+  lo[0] = KX(b.lo); lo[1] = KY(b.lo); lo[2] = KZ(b.lo);
+  hi[0] = KX(b.hi); hi[1] = KY(b.hi); hi[2] = KZ(b.hi);
+  pv[0] = KX(pa); pv[1] = KY(pa); pv[2] = KZ(pa);
+  for (i = 0; i < 3; i++) {
+    if (k_fabs(da[i]) < KF(1.0e-12)) {
+      if (pv[i] < lo[i] || pv[i] > hi[i]) return 0;
+    } else {
+      float inv = KF(1.0) / da[i];
+      float ta = (lo[i] - pv[i]) * inv, tb = (hi[i] - pv[i]) * inv;
+      t0 = k_fmax(t0, k_fmin(ta, tb));
+      t1 = k_fmin(t1, k_fmax(ta, tb));
+      if (t0 > t1) return 0;
+    }
+  }
+  return 1;
+}
+
+/* Closest point of a quadratic piece to the line (o, D): u in [0, 1] and the
+ * squared distance, from the cubic d/du |P_perp(Q(u) - o)|^2 = 0. KX = u, KY = rho^2. */
+KNIT_FN kvec3 knit_quad_closest(KQuad q, kvec3 o, kvec3 D) {
+  kvec3 A0 = kv3_sub(q.q0, o);
+  kvec3 A = kv3_madd(A0, D, -kv3_dot(A0, D));
+  kvec3 B = kv3_madd(q.q1, D, -kv3_dot(q.q1, D));
+  kvec3 C = kv3_madd(q.q2, D, -kv3_dot(q.q2, D));
+  KRoots rt = solve_cubic(KF(2.0) * kv3_dot(C, C), KF(3.0) * kv3_dot(B, C),
+                          kv3_dot(B, B) + KF(2.0) * kv3_dot(A, C), kv3_dot(A, B));
+  float best_u = KF(0.0);
+  float best = kv3_len2(A);
+  float cand[4];
+  int i;
+  float d1 = kv3_len2(kv3_add(kv3_add(A, B), C));
+  if (d1 < best) { best = d1; best_u = KF(1.0); }
+  cand[0] = rt.r0; cand[1] = rt.r1; cand[2] = rt.r2; cand[3] = KF(0.0);
+  for (i = 0; i < rt.n; i++) {
+    float x = cand[i];
+    if (x > KF(0.0) && x < KF(1.0)) {
+      float dd = kv3_len2(kv3_add(A, kv3_scale(kv3_add(B, kv3_scale(C, x)), x)));
+      if (dd < best) { best = dd; best_u = x; }
+    }
+  }
+  return kv3(best_u, best, KF(0.0));
+}
+
+/* Distance geometry of curve point cv relative to the line (o, D). */
+KNIT_STRUCT(KLineRel)
+  float s;     /* (Y - o).D, position of the foot point along the line */
+  float rho2;  /* squared distance to the line */
+  float sd1;   /* Y'.D */
+  float sd2;   /* Y''.D */
+  float phi1;  /* d/dt rho^2 / 2 */
+  float phi2;  /* d2/dt2 rho^2 / 2 */
+KNIT_STRUCT_END(KLineRel)
+
+KNIT_FN KLineRel knit_line_rel(KCurve cv, kvec3 o, kvec3 D) {
+  KLineRel lr;
+  kvec3 q = kv3_sub(cv.p, o);
+  kvec3 e;
+  lr.s = kv3_dot(q, D);
+  e = kv3_madd(q, D, -lr.s);
+  lr.rho2 = kv3_len2(e);
+  lr.sd1 = kv3_dot(cv.d1, D);
+  lr.sd2 = kv3_dot(cv.d2, D);
+  lr.phi1 = kv3_dot(e, cv.d1);
+  lr.phi2 = kv3_len2(cv.d1) - lr.sd1 * lr.sd1 + kv3_dot(e, cv.d2);
+  return lr;
+}
+
+/* Newton on the exact squared distance to the line. */
+KNIT_FN float knit_newton_closest(KnitGeom g, KNIT_ARRAY(int, codes), int k, kvec3 o, kvec3 D,
+                                  float t_start, int iters) {
+  float t = t_start;
+  int i;
+  for (i = 0; i < iters; i++) {
+    KLineRel lr = knit_line_rel(knit_row_curve(g, codes, k, t), o, D);
+    if (lr.phi2 <= KF(0.0)) break;
+    t = t - k_clampf(lr.phi1 / lr.phi2, KF(-0.4), KF(0.4));
+  }
+  return t;
+}
+
+/* Maximise sgn * s(t) + w(t), w = sqrt(r^2 - rho^2): sgn = -1 gives the entry,
+ * +1 the exit. Safeguarded Newton: a step that leaves the tube (rho >= r) or
+ * lowers the objective is halved. Returns t; the caller re-evaluates. */
+KNIT_FN float knit_newton_extreme(KnitGeom g, KNIT_ARRAY(int, codes), int k, kvec3 o, kvec3 D,
+                                  float t_start, float sgn, int iters) {
+  float t = t_start;
+  float r2 = g.r * g.r;
+  KLineRel lr = knit_line_rel(knit_row_curve(g, codes, k, t), o, D);
+  int i;
+  if (lr.rho2 >= r2) return t;
+  for (i = 0; i < iters; i++) {
+    float w = k_sqrt(r2 - lr.rho2);
+    float f = sgn * lr.s + w;
+    float f1 = sgn * lr.sd1 - lr.phi1 / w;
+    float f2 = sgn * lr.sd2 - lr.phi2 / w - lr.phi1 * lr.phi1 / (w * w * w);
+    float step;
+    int tries;
+    int moved = 0;
+    if (f2 < KF(0.0)) step = -f1 / f2;
+    else step = f1 * KF(0.05);  /* not concave here: small uphill step */
+    step = k_clampf(step, KF(-0.25), KF(0.25));
+    if (k_fabs(step) < KF(1.0e-6)) break;
+    for (tries = 0; tries < 4 && moved == 0; tries++) {
+      KLineRel nl = knit_line_rel(knit_row_curve(g, codes, k, t + step), o, D);
+      if (nl.rho2 < r2 && sgn * nl.s + k_sqrt(r2 - nl.rho2) >= f) {
+        t = t + step;
+        lr = nl;
+        moved = 1;
+      } else {
+        step = step * KF(0.5);
+      }
+    }
+    if (moved == 0) break;
+  }
+  return t;
+}
+
+/* The crossing of row k's tube found from curve parameter t (already near the
+ * closest point to the line). Fills s_in, s_out, t, p, n, tangent, row, col, code,
+ * color; hit = 1 when the line does pass through the tube. */
+KNIT_FN KnitLineHit knit_crossing(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+                                  int k, kvec3 o, kvec3 D, float t_close) {
+  KnitLineHit h = knit_line_hit_none();
+  float r2 = g.r * g.r;
+  float t_in = knit_newton_extreme(g, codes, k, o, D, t_close, KF(-1.0), KNIT_NEWTON_EXTREME);
+  float t_out = knit_newton_extreme(g, codes, k, o, D, t_close, KF(1.0), KNIT_NEWTON_EXTREME);
+  KCurve ci = knit_row_curve(g, codes, k, t_in);
+  KLineRel li = knit_line_rel(ci, o, D);
+  KLineRel lo = knit_line_rel(knit_row_curve(g, codes, k, t_out), o, D);
+  int c;
+  if (li.rho2 >= r2 || lo.rho2 >= r2) return h;
+  h.hit = 1;
+  h.s_in = li.s - k_sqrt(r2 - li.rho2);
+  h.s_out = lo.s + k_sqrt(r2 - lo.rho2);
+  h.t = t_in;
+  h.p = kv3_madd(o, D, h.s_in);
+  h.n = kv3_normalize(kv3_sub(h.p, ci.p));
+  h.tangent = kv3_normalize(ci.d1);
+  c = knit_column_of(t_in);
+  h.row = k;
+  h.col = c;
+  h.code = codes[knit_cell_index(g, k, c)];
+  h.color = colors[knit_cell_index(g, k, c)];
+  return h;
+}
+
+/* First tube entry along o + s D with s in [s_min, s_max] (D unit), and the
+ * number of tube crossings overlapping that range. */
+KNIT_FN KnitLineHit knit_line_query(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+                                    kvec3 o, kvec3 D, float s_min, float s_max) {
+  KnitLineHit best = knit_line_hit_none();
+  kvec3 pa = kv3_madd(o, D, s_min), pb = kv3_madd(o, D, s_max);
+  float m = g.r + g.quad_margin;
+  float xmin = k_fmin(KX(pa), KX(pb)), xmax = k_fmax(KX(pa), KX(pb));
+  float ymin = k_fmin(KY(pa), KY(pb)), ymax = k_fmax(KY(pa), KY(pb));
+  int k0 = KINT(k_ceil((ymin - g.h - m) / g.row_spacing - KF(0.5)));
+  int k1 = KINT(k_floor((ymax + g.h + m) / g.row_spacing - KF(0.5)));
+  int g0 = KINT(k_floor((xmin - m - g.a) / KNIT_PIECE_LEN));
+  int g1 = KINT(k_floor((xmax + m + g.a) / KNIT_PIECE_LEN));
+  int count = 0;
+  int k, gp;
+  for (k = k0; k <= k1; k++) {
+    float last_t = -K_BIG, prev_t = -K_BIG;
+    for (gp = g0; gp <= g1; gp++) {
+      KBox bx = kbox_grow(knit_piece_bounds(g, codes, k, gp), m);
+      KQuad q;
+      kvec3 cu;
+      float t;
+      KnitLineHit h;
+      if (knit_segment_box(pa, pb, bx) == 0) continue;
+      q = knit_piece_quad(g, codes, k, gp);
+      cu = knit_quad_closest(q, o, D);
+      if (KY(cu) > m * m) continue;
+      t = knit_newton_closest(g, codes, k, o, D, q.t0 + KX(cu) * KNIT_PIECE_LEN,
+                              KNIT_NEWTON_CLOSEST);
+      if (k_fabs(t - last_t) < KF(0.1) || k_fabs(t - prev_t) < KF(0.1)) continue;
+      h = knit_crossing(g, codes, colors, k, o, D, t);
+      if (h.hit == 0) continue;
+      prev_t = last_t;
+      last_t = t;
+      if (h.s_out >= s_min && h.s_in <= s_max) count = count + 1;
+      if (h.s_in >= s_min && h.s_in <= s_max && h.s_in < best.s_in) best = h;
+    }
+  }
+  best.crossings = count;
+  return best;
+}
+
+/* Vertical query at (x, y): the first tube surface seen from above, and the
+ * number of tubes the vertical line crosses (paper's height query, made right
+ * for overlapping layers). */
+KNIT_FN KnitLineHit knit_vertical_query(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+                                        float x, float y) {
+  float top = g.shell_top + KF(0.01);
+  return knit_line_query(g, codes, colors, kv3(x, y, top), kv3(KF(0.0), KF(0.0), KF(-1.0)),
+                         KF(0.0), KF(2.0) * top);
+}
+
+#endif /* KNIT_KERNEL_QUERY_H */

@@ -1,0 +1,344 @@
+/* Knitshade kernel: stitch geometry in pattern space.
+ *
+ * Paper Sec. 4.1, Eq. 2 (Crane 2023): a knit stitch is the curve
+ *   Y(tau) = (tau + a sin 2tau, h cos tau, d cos 2tau),  tau in [-pi, pi],
+ * swept by a round tube of radius r. Every pattern row is one periodic yarn.
+ *
+ * Pattern space (docs/geometry.md). x runs along the course, y along the wale,
+ * z out of the fabric. Cell (k, c) - row k counted from the BOTTOM, column c -
+ * spans x in [2 pi c, 2 pi (c+1)) and y in [k s, (k+1) s), s = row spacing.
+ * Row k's yarn is parametrised by a global t: column c owns t in
+ * [2 pi c, 2 pi (c+1)), its stitch centred at t_c = 2 pi c + pi, and
+ *   Y_k(t) = (t_c, y_k, 0) + profile(code(k, c), t - t_c),  y_k = (k + 1/2) s.
+ * Profiles by stitch code, with c = cos tau:
+ *   0 knit, 1 purl  (tau + a sin 2tau, h cos tau, d P(c))
+ *   2 front         (tau, -h,  D)   slip stitch: the yarn floats straight across
+ *   3 back          (tau, -h, -D)   in front of / behind the fabric, D = |d| + 2r
+ * Depth. Crane's single stitch has z = d cos 2tau: head (tau = 0) and sinker
+ * (tau = +-pi) in front, legs (tau = +-pi/2) behind, which is what lets row
+ * k's head pass in front of row k+1's legs and row k+1's sinker in front of
+ * row k's legs. A purl flips the depth of its own legs, so the stitches
+ * around it must flip the parts that cross them: the head of cell (k, c)
+ * takes the sign of the stitch above it (k+1, c), its legs its own sign and
+ * its sinker the sign of the stitch below (k-1, c). Splitting
+ * cos 2tau = c^2 (1 + c)/2 - (1 - c^2) + c^2 (1 - c)/2 into head, legs and
+ * sinker terms and signing each gives
+ *   P(c) = (A + sl) c^2 + B c^3 - sl,  A = (sh + ss)/2, B = (sh - ss)/2,
+ * with sh, sl, ss = +1 (knit) or -1 (purl) for head, legs and sinker. With
+ * equal signs P = s cos 2tau: plain knit (or purl, the paper's flipped depth)
+ * exactly as in Crane's model. Slip stitches do not take part: next to a
+ * front or back stitch a loop keeps its own sign.
+ * Where neighbouring cells differ, the two profiles are blended over
+ * |t - boundary| < pi/4 with a C2 quintic smoothstep, so the yarn stays C2
+ * (a knit-purl boundary passes the yarn through z = 0 at the sinker loop).
+ *
+ * For the analytic queries each cell is cut into 8 pieces of pi/4 in t
+ * (global piece g covers t in [g pi/4, (g+1) pi/4]); pieces 0 and 7 of a cell
+ * are its blend pieces. On each piece sin 2tau and cos 2tau are monotone
+ * quarter periods and cos tau is monotone, which gives cheap exact bounds
+ * (knit_piece_bounds) and a 3-point quadratic interpolant (knit_piece_quad). */
+#ifndef KNIT_KERNEL_STITCH_H
+#define KNIT_KERNEL_STITCH_H
+
+#define KNIT_CODE_KNIT 0
+#define KNIT_CODE_PURL 1
+#define KNIT_CODE_FRONT 2
+#define KNIT_CODE_BACK 3
+
+#define KNIT_PIECE_LEN K_PI_4
+#define KNIT_PIECES_PER_CELL 8
+#define KNIT_BLEND_HALF_WIDTH K_PI_4
+
+/* Geometry of a knit surface. Build with knit_geom_make; validated by the
+ * host before (StitchParams::validate). */
+KNIT_STRUCT(KnitGeom)
+  float a, h, d, r;   /* Crane's parameters and tube radius */
+  float row_spacing;  /* s = h + 1/2 */
+  float float_depth;  /* D = |d| + 2r, depth of slip-stitch floats */
+  float shell_top;    /* highest z of any tube: max(|d|, D if floats) + r */
+  int rows, cols;     /* pattern size */
+  int has_floats;     /* pattern uses codes 2 or 3 */
+  float quad_margin;  /* bound on |quadratic interpolant - curve| over a piece */
+KNIT_STRUCT_END(KnitGeom)
+
+KNIT_FN KnitGeom knit_geom_make(float a, float h, float d, float r, int rows, int cols,
+                                int has_floats) {
+  KnitGeom g;
+  g.a = a;
+  g.h = h;
+  g.d = d;
+  g.r = r;
+  g.row_spacing = h + KF(0.5);
+  g.float_depth = k_fabs(d) + KF(2.0) * r;
+  g.has_floats = has_floats;
+  g.shell_top = (has_floats ? g.float_depth : k_fabs(d)) + r;
+  g.rows = rows;
+  g.cols = cols;
+  /* Interpolation error of 3 equispaced nodes, spacing e = pi/8:
+   * |f - p| <= max|f'''| e^3 / (9 sqrt 3), with f''' bounded by 8a (a sin 2t),
+   * h (h cos t) and 8|d| (d cos 2t). Doubled for the blend pieces, whose
+   * smoothstep adds third-derivative terms; tests/native/test_stitch.cpp
+   * measures the real maximum against this bound. */
+  g.quad_margin = KF(2.0) * (KF(0.0311) * (g.a + k_fabs(g.d)) + KF(0.0039) * g.h) +
+                  KF(0.05) * (has_floats ? g.float_depth + g.h : KF(0.0));
+  return g;
+}
+
+/* Stitch code and colour index of cell (k from the bottom, c), both periodic. */
+KNIT_FN int knit_cell_index(KnitGeom g, int k, int c) {
+  int pr = g.rows - 1 - k_modi(k, g.rows); /* pattern rows are written top first */
+  return pr * g.cols + k_modi(c, g.cols);
+}
+KNIT_FN int knit_cell_code(KnitGeom g, KNIT_ARRAY(int, codes), int k, int c) {
+  return codes[knit_cell_index(g, k, c)];
+}
+KNIT_FN int knit_column_of(float t) { return KINT(k_floor(t / K_2PI)); }
+KNIT_FN float knit_row_centre_y(KnitGeom g, int k) { return (KFLT(k) + KF(0.5)) * g.row_spacing; }
+
+/* A point of a curve with its first and second derivative in t. */
+KNIT_STRUCT(KCurve)
+  kvec3 p, d1, d2;
+KNIT_STRUCT_END(KCurve)
+
+/* Depth signs (head, legs, sinker) of cell (k, c), see the file header. */
+KNIT_FN float knit_code_sign(int code) { return code == KNIT_CODE_PURL ? KF(-1.0) : KF(1.0); }
+KNIT_FN int knit_code_is_loop(int code) { return code == KNIT_CODE_KNIT || code == KNIT_CODE_PURL; }
+KNIT_FN kvec3 knit_cell_signs(KnitGeom g, KNIT_ARRAY(int, codes), int k, int c) {
+  float sl = knit_code_sign(knit_cell_code(g, codes, k, c));
+  int above = knit_cell_code(g, codes, k + 1, c);
+  int below = knit_cell_code(g, codes, k - 1, c);
+  return kv3(knit_code_is_loop(above) ? knit_code_sign(above) : sl, sl,
+             knit_code_is_loop(below) ? knit_code_sign(below) : sl);
+}
+
+/* Depth polynomial P(c) = (A + sl) c^2 + B c^3 - sl and its derivatives in
+ * c: KX = P, KY = P', KZ = P''. */
+KNIT_FN kvec3 knit_depth_poly(kvec3 sg, float c) {
+  float A = KF(0.5) * (KX(sg) + KZ(sg)) + KY(sg);
+  float B = KF(0.5) * (KX(sg) - KZ(sg));
+  return kv3((A + B * c) * c * c - KY(sg), (KF(2.0) * A + KF(3.0) * B * c) * c,
+             KF(2.0) * A + KF(6.0) * B * c);
+}
+
+/* profile(code, tau) of a cell with depth signs sg, placed at the cell centre (tc, yk). */
+KNIT_FN KCurve knit_profile(KnitGeom g, int code, kvec3 sg, float tau, float tc, float yk) {
+  KCurve cv;
+  if (knit_code_is_loop(code)) {
+    float s1 = k_sin(tau), c1 = k_cos(tau);
+    float s2 = KF(2.0) * s1 * c1, c2 = c1 * c1 - s1 * s1;
+    kvec3 dp = knit_depth_poly(sg, c1);
+    cv.p = kv3(tc + tau + g.a * s2, yk + g.h * c1, g.d * KX(dp));
+    cv.d1 = kv3(KF(1.0) + KF(2.0) * g.a * c2, -g.h * s1, -g.d * KY(dp) * s1);
+    cv.d2 = kv3(KF(-4.0) * g.a * s2, -g.h * c1, g.d * (KZ(dp) * s1 * s1 - KY(dp) * c1));
+  } else {
+    float zz = code == KNIT_CODE_FRONT ? g.float_depth : -g.float_depth;
+    cv.p = kv3(tc + tau, yk - g.h, zz);
+    cv.d1 = kv3(KF(1.0), KF(0.0), KF(0.0));
+    cv.d2 = kv3(KF(0.0), KF(0.0), KF(0.0));
+  }
+  return cv;
+}
+
+/* Quintic smoothstep weight and its derivatives in t, for a blend over
+ * [tb - w, tb + w]: KX = weight, KY = d/dt, KZ = d2/dt2. */
+KNIT_FN kvec3 knit_blend_weight(float t, float tb) {
+  float w2 = KF(2.0) * KNIT_BLEND_HALF_WIDTH;
+  float x = k_clampf((t - (tb - KNIT_BLEND_HALF_WIDTH)) / w2, KF(0.0), KF(1.0));
+  float x2 = x * x;
+  float w = x2 * x * (KF(10.0) + x * (KF(-15.0) + KF(6.0) * x));
+  float dw = KF(30.0) * x2 * (x - KF(1.0)) * (x - KF(1.0)) / w2;
+  float ddw = KF(60.0) * x * (x - KF(1.0)) * (KF(2.0) * x - KF(1.0)) / (w2 * w2);
+  return kv3(w, dw, ddw);
+}
+
+/* Whether two cells have the same profile (then no blend is needed). */
+KNIT_FN int knit_same_profile(int code, kvec3 sg, int ncode, kvec3 nsg) {
+  if (knit_code_is_loop(code) == 0 || knit_code_is_loop(ncode) == 0) return code == ncode;
+  return KX(sg) == KX(nsg) && KY(sg) == KY(nsg) && KZ(sg) == KZ(nsg);
+}
+
+/* The exact yarn curve of row k at global parameter t (see the file header). */
+KNIT_FN KCurve knit_row_curve(KnitGeom g, KNIT_ARRAY(int, codes), int k, float t) {
+  int c = knit_column_of(t);
+  float tc = K_2PI * KFLT(c) + K_PI;
+  float tau = t - tc;
+  float yk = knit_row_centre_y(g, k);
+  int code = knit_cell_code(g, codes, k, c);
+  kvec3 sg = knit_cell_signs(g, codes, k, c);
+  KCurve self = knit_profile(g, code, sg, tau, tc, yk);
+  int nc = c;
+  float tb = KF(0.0);
+  if (tau > K_PI - KNIT_BLEND_HALF_WIDTH) {
+    nc = c + 1;
+    tb = tc + K_PI;
+  } else if (tau < KNIT_BLEND_HALF_WIDTH - K_PI) {
+    nc = c - 1;
+    tb = tc - K_PI;
+  }
+  if (nc == c) return self;
+  {
+    int ncode = knit_cell_code(g, codes, k, nc);
+    kvec3 nsg = knit_cell_signs(g, codes, k, nc);
+    float ntc = K_2PI * KFLT(nc) + K_PI;
+    KCurve other, lo, hi, out;
+    kvec3 w, dp, dd1, dd2;
+    if (knit_same_profile(code, sg, ncode, nsg)) return self;
+    other = knit_profile(g, ncode, nsg, t - ntc, ntc, yk);
+    lo = nc > c ? self : other; /* the cell left of the boundary */
+    hi = nc > c ? other : self;
+    w = knit_blend_weight(t, tb);
+    dp = kv3_sub(hi.p, lo.p);
+    dd1 = kv3_sub(hi.d1, lo.d1);
+    dd2 = kv3_sub(hi.d2, lo.d2);
+    out.p = kv3_madd(lo.p, dp, KX(w));
+    out.d1 = kv3_madd(kv3_madd(lo.d1, dd1, KX(w)), dp, KY(w));
+    out.d2 = kv3_madd(kv3_madd(kv3_madd(lo.d2, dd2, KX(w)), dd1, KF(2.0) * KY(w)), dp, KZ(w));
+    return out;
+  }
+}
+
+/* cos(m pi / 8) and sin(m pi / 8) for any integer m, without libm. */
+KNIT_FN float knit_cos_pi8(int m) {
+  int q = k_modi(m, 16);
+  int r = q > 8 ? 16 - q : q;     /* cos is even: fold to 0..8 */
+  float sgn = r > 4 ? KF(-1.0) : KF(1.0);
+  int e = r > 4 ? 8 - r : r;      /* cos(pi - x) = -cos x: fold to 0..4 */
+  float val = e == 0 ? KF(1.0)
+          : e == 1 ? KF(0.92387953251128675613)
+          : e == 2 ? KF(0.70710678118654752440)
+          : e == 3 ? KF(0.38268343236508977173)
+          : KF(0.0);
+  return sgn * val;
+}
+KNIT_FN float knit_sin_pi8(int m) { return knit_cos_pi8(m - 4); }
+
+/* Position on the unblended profile at tau = m pi/8 - pi (node m of a cell). */
+KNIT_FN kvec3 knit_profile_node(KnitGeom g, int code, kvec3 sg, int m, float tc, float yk) {
+  float tau = KFLT(m) * (K_PI / KF(8.0)) - K_PI;
+  if (knit_code_is_loop(code)) {
+    /* tau = m pi/8 - pi: cos tau = -cos(m pi/8); 2 tau = m pi/4 - 2 pi */
+    float c1 = -knit_cos_pi8(m);
+    return kv3(tc + tau + g.a * knit_sin_pi8(2 * m), yk + g.h * c1, g.d * KX(knit_depth_poly(sg, c1)));
+  }
+  return kv3(tc + tau, yk - g.h, code == KNIT_CODE_FRONT ? g.float_depth : -g.float_depth);
+}
+
+/* An axis-aligned box. */
+KNIT_STRUCT(KBox)
+  kvec3 lo, hi;
+KNIT_STRUCT_END(KBox)
+
+KNIT_FN KBox kbox_grow(KBox b, float m) {
+  KBox o;
+  o.lo = kv3(KX(b.lo) - m, KY(b.lo) - m, KZ(b.lo) - m);
+  o.hi = kv3(KX(b.hi) + m, KY(b.hi) + m, KZ(b.hi) + m);
+  return o;
+}
+
+/* Bounds of the unblended profile of `code` over piece j of a cell. Over a
+ * piece cos tau is monotone and sin 2tau is a monotone quarter period, so x, y
+ * bounds come from the ends (x as [tau0, tau1] + a [min, max] sin 2tau); the
+ * depth cubic P(c) is bounded by its values at the ends and at its
+ * stationary points inside. */
+KNIT_FN KBox knit_profile_piece_bounds(KnitGeom g, int code, kvec3 sg, int j, float tc, float yk) {
+  KBox b;
+  float t0 = KFLT(j) * K_PI_4 - K_PI, t1 = t0 + K_PI_4;
+  if (knit_code_is_loop(code)) {
+    float sa = g.a * knit_sin_pi8(4 * j), sb = g.a * knit_sin_pi8(4 * j + 4);
+    float ca = -knit_cos_pi8(2 * j), cb = -knit_cos_pi8(2 * j + 2);
+    float clo = k_fmin(ca, cb), chi = k_fmax(ca, cb);
+    float pa = KX(knit_depth_poly(sg, ca)), pb = KX(knit_depth_poly(sg, cb));
+    float plo = k_fmin(pa, pb), phi = k_fmax(pa, pb);
+    float A = KF(0.5) * (KX(sg) + KZ(sg)) + KY(sg);
+    float B = KF(0.5) * (KX(sg) - KZ(sg));
+    float cs = B != KF(0.0) ? KF(-2.0) * A / (KF(3.0) * B) : KF(0.0);
+    if (clo < KF(0.0) && chi > KF(0.0)) {
+      float p0 = KX(knit_depth_poly(sg, KF(0.0)));
+      plo = k_fmin(plo, p0);
+      phi = k_fmax(phi, p0);
+    }
+    if (cs > clo && cs < chi) {
+      float p1 = KX(knit_depth_poly(sg, cs));
+      plo = k_fmin(plo, p1);
+      phi = k_fmax(phi, p1);
+    }
+    b.lo = kv3(tc + t0 + k_fmin(sa, sb), yk + g.h * clo, k_fmin(g.d * plo, g.d * phi));
+    b.hi = kv3(tc + t1 + k_fmax(sa, sb), yk + g.h * chi, k_fmax(g.d * plo, g.d * phi));
+  } else {
+    float zz = code == KNIT_CODE_FRONT ? g.float_depth : -g.float_depth;
+    b.lo = kv3(tc + t0, yk - g.h, zz);
+    b.hi = kv3(tc + t1, yk - g.h, zz);
+  }
+  return b;
+}
+
+/* The cell and code of the neighbour a piece blends with (or the cell itself). */
+KNIT_FN int knit_piece_neighbour(int j) { return j == 0 ? -1 : (j == 7 ? 1 : 0); }
+
+/* Conservative bounds of the exact curve of row k over global piece gp. A
+ * blended piece lies in the union of both profiles' boxes (convex weights). */
+KNIT_FN KBox knit_piece_bounds(KnitGeom g, KNIT_ARRAY(int, codes), int k, int gp) {
+  int c = KINT(k_floor(KFLT(gp) / KF(8.0)));
+  int j = gp - 8 * c;
+  float tc = K_2PI * KFLT(c) + K_PI, yk = knit_row_centre_y(g, k);
+  int code = knit_cell_code(g, codes, k, c);
+  kvec3 sg = knit_cell_signs(g, codes, k, c);
+  KBox b = knit_profile_piece_bounds(g, code, sg, j, tc, yk);
+  int dn = knit_piece_neighbour(j);
+  if (dn != 0) {
+    int ncode = knit_cell_code(g, codes, k, c + dn);
+    kvec3 nsg = knit_cell_signs(g, codes, k, c + dn);
+    if (knit_same_profile(code, sg, ncode, nsg) == 0) {
+      /* The neighbour's profile over the same t range: its piece 8 (just past
+       * its right end) when it is on the left, piece -1 when on the right. */
+      float ntc = tc + KFLT(dn) * K_2PI;
+      KBox nb = knit_profile_piece_bounds(g, ncode, nsg, dn < 0 ? 8 : -1, ntc, yk);
+      b.lo = kv3(k_fmin(KX(b.lo), KX(nb.lo)), k_fmin(KY(b.lo), KY(nb.lo)), k_fmin(KZ(b.lo), KZ(nb.lo)));
+      b.hi = kv3(k_fmax(KX(b.hi), KX(nb.hi)), k_fmax(KY(b.hi), KY(nb.hi)), k_fmax(KZ(b.hi), KZ(nb.hi)));
+    }
+  }
+  return b;
+}
+
+/* Quadratic interpolant Q(u) = q0 + q1 u + q2 u^2, u in [0, 1], of the exact
+ * curve of row k over global piece gp (t = t0 + u pi/4), through the piece's
+ * ends and midpoint. */
+KNIT_STRUCT(KQuad)
+  kvec3 q0, q1, q2;
+  float t0;
+KNIT_STRUCT_END(KQuad)
+
+KNIT_FN KQuad knit_quad_from_nodes(kvec3 f0, kvec3 f1, kvec3 f2, float t0) {
+  KQuad q;
+  q.q0 = f0;
+  q.q1 = kv3_sub(kv3_sub(kv3_scale(f1, KF(4.0)), kv3_scale(f0, KF(3.0))), f2);
+  q.q2 = kv3_scale(kv3_add(kv3_sub(f0, kv3_scale(f1, KF(2.0))), f2), KF(2.0));
+  q.t0 = t0;
+  return q;
+}
+
+KNIT_FN KQuad knit_piece_quad(KnitGeom g, KNIT_ARRAY(int, codes), int k, int gp) {
+  int c = KINT(k_floor(KFLT(gp) / KF(8.0)));
+  int j = gp - 8 * c;
+  float t0 = KFLT(gp) * K_PI_4;
+  int dn = knit_piece_neighbour(j);
+  int code = knit_cell_code(g, codes, k, c);
+  kvec3 sg = knit_cell_signs(g, codes, k, c);
+  if (dn == 0 || knit_same_profile(code, sg, knit_cell_code(g, codes, k, c + dn),
+                                   knit_cell_signs(g, codes, k, c + dn))) {
+    float tc = K_2PI * KFLT(c) + K_PI, yk = knit_row_centre_y(g, k);
+    return knit_quad_from_nodes(knit_profile_node(g, code, sg, 2 * j, tc, yk),
+                                knit_profile_node(g, code, sg, 2 * j + 1, tc, yk),
+                                knit_profile_node(g, code, sg, 2 * j + 2, tc, yk), t0);
+  }
+  /* Blended piece: interpolate the exact (blended) curve. */
+  return knit_quad_from_nodes(knit_row_curve(g, codes, k, t0).p,
+                              knit_row_curve(g, codes, k, t0 + KF(0.5) * K_PI_4).p,
+                              knit_row_curve(g, codes, k, t0 + K_PI_4).p, t0);
+}
+
+KNIT_FN kvec3 knit_quad_eval(KQuad q, float x) {
+  return kv3_add(q.q0, kv3_scale(kv3_add(q.q1, kv3_scale(q.q2, x)), x));
+}
+
+#endif /* KNIT_KERNEL_STITCH_H */

@@ -1,0 +1,129 @@
+// KnitSurface: the host side of the analytic stitch queries and CAPM.
+#include "knit/surface.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace knit {
+
+void FlatFrame::frame(float, float, Vec3& t, Vec3& b, Vec3& n) const {
+  t = {1, 0, 0};
+  b = {0, 1, 0};
+  n = {0, 0, 1};
+}
+
+void CylinderFrame::frame(float x, float, Vec3& t, Vec3& b, Vec3& n) const {
+  const float phi = x / radius_;
+  const float s = std::sin(phi), c = std::cos(phi);
+  t = {c, 0, -s};
+  b = {0, 1, 0};
+  n = {s, 0, c};
+}
+
+void SphereFrame::frame(float x, float y, Vec3& t, Vec3& b, Vec3& n) const {
+  const float lon = x / radius_, lat = y / radius_;
+  const float sl = std::sin(lon), cl = std::cos(lon), sb = std::sin(lat), cb = std::cos(lat);
+  n = {cb * sl, sb, cb * cl};
+  t = {cl, 0, -sl};
+  b = {-sb * sl, cb, -sb * cl};
+}
+
+KnitSurface::KnitSurface(Pattern pattern, StitchParams params)
+    : pattern_(std::move(pattern)), params_(params) {
+  params_.validate();
+  const bool floats = pattern_.uses(Stitch::Front) || pattern_.uses(Stitch::Back);
+  geom_ = k::knit_geom_make(params_.a, params_.h, params_.d, params_.r, pattern_.rows(),
+                            pattern_.cols(), floats ? 1 : 0);
+}
+
+float KnitSurface::shell_top() const { return geom_.shell_top; }
+float KnitSurface::cell_width() const { return 6.28318530717958647692f; }
+float KnitSurface::cell_height() const { return geom_.row_spacing; }
+float KnitSurface::period_x() const { return cell_width() * float(pattern_.cols()); }
+float KnitSurface::period_y() const { return cell_height() * float(pattern_.rows()); }
+
+static TubeCrossing to_crossing(const k::KnitLineHit& h) {
+  TubeCrossing c;
+  c.s_in = h.s_in;
+  c.s_out = h.s_out;
+  c.p_in = h.p;
+  c.normal = h.n;
+  c.tangent = h.tangent;
+  c.row = h.row;
+  c.col = h.col;
+  c.stitch = h.code;
+  c.color = h.color;
+  c.layer = ((h.row % 2) + 2) % 2;
+  c.t = h.t;
+  return c;
+}
+
+std::vector<TubeCrossing> KnitSurface::crossings(float x, float y) const {
+  std::vector<TubeCrossing> out;
+  const float top = geom_.shell_top + 0.01f;
+  const Vec3 o = k::kv3(x, y, top), D = k::kv3(0, 0, -1);
+  float s_min = 0;
+  for (int guard = 0; guard < 16; ++guard) {
+    k::KnitLineHit h = k::knit_line_query(geom_, codes(), colors(), o, D, s_min, 2 * top);
+    if (!h.hit) break;
+    out.push_back(to_crossing(h));
+    s_min = h.s_in + 1e-4f;
+  }
+  return out;
+}
+
+SurfaceHit KnitSurface::query(float x, float y) const {
+  k::KnitLineHit h = k::knit_vertical_query(geom_, codes(), colors(), x, y);
+  SurfaceHit s;
+  s.hit = h.hit != 0;
+  s.layers = h.crossings;
+  if (s.hit) {
+    s.position = h.p;
+    s.normal = h.n;
+    s.tangent = h.tangent;
+    s.row = h.row;
+    s.col = h.col;
+    s.stitch = h.code;
+    s.color = h.color;
+  }
+  return s;
+}
+
+SurfaceHit KnitSurface::capm(float x, float y, Vec3 wi_local, const FrameProvider* frame,
+                             const CapmOptions& opt) const {
+  static const FlatFrame flat;
+  const FrameProvider& fp = frame ? *frame : flat;
+  if (!(opt.max_steps >= 1) || !(opt.max_segment > 0))
+    throw std::invalid_argument("CapmOptions: max_steps must be >= 1 and max_segment > 0");
+  Vec3 t, b, n;
+  fp.frame(x, y, t, b, n);
+  const Vec3 wi = k::kv3_normalize(wi_local);
+  const Vec3 ray_world = k::kv3_neg(k::kv3_from_local(wi, t, b, n));
+  const Vec3 kappa = fp.curvature(x, y);
+  k::KnitCapm st = k::knit_capm_begin(geom_, x, y, wi);
+  while (st.state == KNIT_CAPM_MARCHING) {
+    st = k::knit_capm_step(geom_, codes(), colors(), st, opt.max_segment, opt.max_steps, kappa.x,
+                           kappa.y);
+    if (st.state != KNIT_CAPM_MARCHING) break;
+    fp.frame(st.p.x, st.p.y, t, b, n);
+    st = k::knit_capm_bend(geom_, st, k::kv3_to_local(ray_world, t, b, n));
+  }
+  SurfaceHit s;
+  s.steps = st.steps;
+  s.hit = st.state == KNIT_CAPM_HIT;
+  if (s.hit) {
+    const k::KnitLineHit& h = st.hit;
+    s.position = h.p;
+    s.normal = h.n;
+    s.tangent = h.tangent;
+    s.row = h.row;
+    s.col = h.col;
+    s.stitch = h.code;
+    s.color = h.color;
+    s.layers = k::knit_vertical_query(geom_, codes(), colors(), h.p.x, h.p.y).crossings;
+  }
+  return s;
+}
+
+}  // namespace knit

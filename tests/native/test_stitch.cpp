@@ -1,0 +1,200 @@
+// The kernel's float stitch geometry against the double-precision reference
+// curve (native/src/yarn_curve.cpp): exact curve, piece bounds, quadratic
+// interpolants and their error bound.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "knit/kernel.h"
+#include "knit/surface.h"
+#include "knit/yarns.h"
+#include "test_patterns.h"
+
+namespace {
+
+using namespace knit;
+
+constexpr double kPi = 3.14159265358979323846;
+
+KnitSurface make(const Pattern& p, StitchParams sp = {}) { return KnitSurface(p, sp); }
+
+TEST(Stitch, KernelCurveMatchesDoubleReference) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> T(-40.0, 40.0);
+  for (const Pattern& pat : {test::seed(), test::slip_floats(), test::pyramid16()}) {
+    KnitSurface s = make(pat);
+    double worst_p = 0, worst_d1 = 0, worst_d2 = 0;
+    for (int i = 0; i < 20000; ++i) {
+      const double t = T(rng);
+      const int row = int(rng() % 40) - 20;
+      const CurvePoint ref = yarn_curve_exact(pat, s.params(), row, t);
+      const k::KCurve got = k::knit_row_curve(s.geom(), s.codes(), row, float(t));
+      const double gp[3] = {got.p.x, got.p.y, got.p.z}, g1[3] = {got.d1.x, got.d1.y, got.d1.z},
+                   g2[3] = {got.d2.x, got.d2.y, got.d2.z};
+      for (int k = 0; k < 3; ++k) {
+        worst_p = std::max(worst_p, std::abs(gp[k] - ref.p[size_t(k)]));
+        worst_d1 = std::max(worst_d1, std::abs(g1[k] - ref.dp[size_t(k)]));
+        worst_d2 = std::max(worst_d2, std::abs(g2[k] - ref.ddp[size_t(k)]));
+      }
+    }
+    // Float evaluation of t up to |t| ~ 40: a few ulps of 40 (~4e-6) times |Y'|.
+    EXPECT_LT(worst_p, 1e-4);
+    EXPECT_LT(worst_d1, 1e-3);
+    EXPECT_LT(worst_d2, 5e-3);
+  }
+}
+
+TEST(Stitch, CurveIsC1AcrossEveryCellBoundary) {
+  // Knit/purl/front/back neighbours in every combination: the blended curve
+  // must be continuous with a continuous tangent at every boundary.
+  Pattern pat = Pattern::from_rows({{0, 1, 2, 3, 0, 2, 1, 3, 3, 2, 2, 0, 0, 3, 1, 1}});
+  StitchParams sp;
+  for (int c = -1; c <= 17; ++c) {
+    const double tb = 2 * kPi * c;
+    for (double eps : {1e-7}) {
+      CurvePoint a = yarn_curve_exact(pat, sp, 0, tb - eps), b = yarn_curve_exact(pat, sp, 0, tb + eps);
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_NEAR(a.p[size_t(k)], b.p[size_t(k)], 1e-5) << "boundary " << c;
+        EXPECT_NEAR(a.dp[size_t(k)], b.dp[size_t(k)], 1e-4) << "boundary " << c;
+      }
+    }
+    // Also across the blend window's ends (pi/4 from the boundary).
+    for (double e : {kPi / 4, -kPi / 4}) {
+      CurvePoint a = yarn_curve_exact(pat, sp, 0, tb + e - 1e-7), b = yarn_curve_exact(pat, sp, 0, tb + e + 1e-7);
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_NEAR(a.p[size_t(k)], b.p[size_t(k)], 1e-5);
+        EXPECT_NEAR(a.dp[size_t(k)], b.dp[size_t(k)], 1e-4);
+        EXPECT_NEAR(a.ddp[size_t(k)], b.ddp[size_t(k)], 1e-3);
+      }
+    }
+  }
+}
+
+TEST(Stitch, PieceBoundsContainTheCurve) {
+  Pattern pat = Pattern::from_rows({{0, 1, 2, 3, 0, 2, 1, 3}, {1, 1, 0, 0, 3, 3, 2, 2}});
+  for (StitchParams sp : {StitchParams{}, StitchParams{1.25f, 3.0f, -0.6f, 0.4f}, StitchParams{1.75f, 5.0f, 1.4f, 0.5f}}) {
+    KnitSurface s = make(pat, sp);
+    for (int row = -2; row < 4; ++row)
+      for (int gp = -16; gp < 80; ++gp) {
+        k::KBox b = k::knit_piece_bounds(s.geom(), s.codes(), row, gp);
+        for (int i = 0; i <= 64; ++i) {
+          double t = (gp + i / 64.0) * kPi / 4;
+          CurvePoint c = yarn_curve_exact(pat, sp, row, t);
+          const float tol = 1e-4f;
+          ASSERT_GE(c.p[0], b.lo.x - tol) << "row " << row << " piece " << gp;
+          ASSERT_LE(c.p[0], b.hi.x + tol) << "row " << row << " piece " << gp;
+          ASSERT_GE(c.p[1], b.lo.y - tol);
+          ASSERT_LE(c.p[1], b.hi.y + tol);
+          ASSERT_GE(c.p[2], b.lo.z - tol);
+          ASSERT_LE(c.p[2], b.hi.z + tol);
+        }
+      }
+  }
+}
+
+// The quadratic interpolants (our derivation replacing the paper's Eq. 5-8)
+// against the exact curve: report and bound the maximum error per component.
+TEST(Stitch, QuadraticInterpolantErrorWithinBound) {
+  Pattern pat = Pattern::from_rows({{0, 1, 2, 3, 0, 2, 1, 3}, {1, 1, 0, 0, 3, 3, 2, 2}});
+  for (StitchParams sp : {StitchParams{}, StitchParams{1.25f, 3.0f, -0.6f, 0.4f}, StitchParams{1.75f, 5.0f, 1.4f, 0.5f}}) {
+    KnitSurface s = make(pat, sp);
+    double worst[3] = {0, 0, 0}, worst_plain = 0, worst_blend = 0;
+    for (int row = 0; row < 2; ++row)
+      for (int gp = 0; gp < 64; ++gp) {
+        k::KQuad q = k::knit_piece_quad(s.geom(), s.codes(), row, gp);
+        const bool blend = (gp % 8 == 0 || gp % 8 == 7);
+        for (int i = 0; i <= 200; ++i) {
+          const double u = i / 200.0;
+          CurvePoint c = yarn_curve_exact(pat, sp, row, (gp + u) * kPi / 4);
+          k::kvec3 a = k::knit_quad_eval(q, float(u));
+          const double e[3] = {std::abs(a.x - c.p[0]), std::abs(a.y - c.p[1]), std::abs(a.z - c.p[2])};
+          const double en = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+          for (int k = 0; k < 3; ++k) worst[k] = std::max(worst[k], e[k]);
+          (blend ? worst_blend : worst_plain) = std::max(blend ? worst_blend : worst_plain, en);
+        }
+      }
+    const double bound = s.geom().quad_margin;
+    std::printf("[ quad ] %s: max error x %.4f y %.4f z %.4f | plain pieces %.4f, blend pieces %.4f | bound %.4f\n",
+                sp.to_string().c_str(), worst[0], worst[1], worst[2], worst_plain, worst_blend, bound);
+    EXPECT_LE(worst_plain, bound / 2 + 1e-4) << "plain-piece error exceeds the analytic bound";
+    EXPECT_LE(worst_blend, bound) << "blend-piece error exceeds the margin used by the query";
+  }
+}
+
+TEST(Stitch, ShellTopBoundsEveryTube) {
+  for (const Pattern& pat : {test::stockinette(), test::slip_floats(), test::pyramid16()}) {
+    KnitSurface s = make(pat);
+    double top = 0;
+    for (int row = 0; row < pat.rows(); ++row)
+      for (int i = 0; i < 4096; ++i) {
+        double t = 2 * kPi * pat.cols() * i / 4096.0;
+        top = std::max(top, std::abs(yarn_curve_exact(pat, s.params(), row, t).p[2]) + s.params().r);
+      }
+    EXPECT_NEAR(s.shell_top(), top, 1e-3) << "shell_top must be the highest tube point";
+  }
+}
+
+TEST(Stitch, ParamsValidationNamesTheFieldAndValue) {
+  auto msg = [](StitchParams p) {
+    try {
+      p.validate();
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(msg({-1.f, 4.f, 1.f, 0.5f}).find("a (loop roundness) must be > 0, got -1"), std::string::npos);
+  EXPECT_NE(msg({1.5f, 0.f, 1.f, 0.5f}).find("h (loop height) must be > 0, got 0"), std::string::npos);
+  EXPECT_NE(msg({1.5f, 4.f, 0.f, 0.5f}).find("d (loop depth) must be non-zero"), std::string::npos);
+  EXPECT_NE(msg({1.5f, 4.f, 1.f, -0.1f}).find("r (yarn radius) must be > 0, got -0.1"), std::string::npos);
+  EXPECT_NE(msg({NAN, 4.f, 1.f, 0.5f}).find("a must be finite, got nan"), std::string::npos);
+  EXPECT_NE(msg({1.5f, INFINITY, 1.f, 0.5f}).find("h must be finite"), std::string::npos);
+  // The suggested r = 0.8 with Crane's a, h, d interpenetrates.
+  std::string m = msg({1.5f, 4.f, 1.f, 0.8f});
+  EXPECT_NE(m.find("pass through each other"), std::string::npos) << m;
+  EXPECT_NE(m.find("r must be <= 0.69"), std::string::npos) << m;
+  EXPECT_EQ(msg({}), "");
+  EXPECT_EQ(msg({1.5f, 4.f, -1.f, 0.65f}), "");
+}
+
+// The clearance is what it claims: tubes of radius clearance/2 just touch in
+// one of the neighbourhoods and never overlap in any, checked on the
+// explicit curves of 4x4 patches.
+TEST(Stitch, ClearanceSeparatesTubes) {
+  StitchParams sp;
+  const double c = sp.clearance();
+  EXPECT_GT(c, 1.3);
+  EXPECT_LT(c, 1.6);
+  double overall = 1e300;
+  for (const Pattern& pat : {test::stockinette(), test::garter(), test::rib_1x1(), test::seed()}) {
+    ExplicitYarns y = explicit_yarns(pat, sp, 4 / pat.cols(), 4 / pat.rows(), 96);
+    // Every pair of points on different rows, or far apart along one row.
+    for (size_t a = 0; a < y.curves.size(); ++a)
+      for (size_t b = a; b < y.curves.size() && b <= a + 2; ++b) {
+        const auto& A = y.curves[a].points;
+        const auto& B = y.curves[b].points;
+        for (size_t i = 0; i < A.size(); i += 2)
+          for (size_t j = (a == b ? i + 20 : 0); j < B.size(); j += 2) {
+            double dx = A[i][0] - B[j][0], dy = A[i][1] - B[j][1], dz = A[i][2] - B[j][2];
+            double dd = std::sqrt(dx * dx + dy * dy + dz * dz);
+            if (a == b) {
+              // Only count same-row pairs whose chord leaves the tube (really
+              // different pieces): the curve between them strays > dd away.
+              double stray = 0;
+              for (size_t m = i; m <= j; m += 4) {
+                double ex = A[m][0] - A[i][0], ey = A[m][1] - A[i][1], ez = A[m][2] - A[i][2];
+                stray = std::max(stray, std::sqrt(ex * ex + ey * ey + ez * ez));
+              }
+              if (stray < 1.5 * dd + 0.5) continue;
+            }
+            overall = std::min(overall, dd);
+          }
+      }
+  }
+  EXPECT_GE(overall, c * 0.995) << "explicit curves come closer than the computed clearance";
+  EXPECT_LE(overall, c * 1.03) << "clearance is far below what the explicit curves show";
+}
+
+}  // namespace
