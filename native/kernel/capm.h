@@ -58,39 +58,87 @@ KNIT_FN KnitCapm knit_capm_begin(KnitGeom g, float x, float y, kvec3 wi_local) {
   return st;
 }
 
-/* One segment. max_segment: horizontal travel per step (pattern units);
- * kx, ky: base curvature for the metric (0 when unknown). */
-KNIT_FN KnitCapm knit_capm_step(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
-                                KnitCapm in, float max_segment, int max_steps, float kx, float ky) {
-  KnitCapm st = in;
+/* Length of the next segment along st.D: to the shell's bottom (descending)
+ * or top (climbing), and at most max_segment of horizontal travel. */
+KNIT_FN float knit_capm_segment(KnitGeom g, KnitCapm st, float max_segment) {
   float dz = KZ(st.D);
   float hs = k_sqrt(KX(st.D) * KX(st.D) + KY(st.D) * KY(st.D));
   float len = K_BIG;
-  float eps = KF(1.0e-4) * g.shell_top;
-  KnitLineHit h;
-  if (st.state != KNIT_CAPM_MARCHING) return st;
   if (dz < KF(0.0)) len = (KZ(st.p) + g.shell_top) / -dz;
   else if (dz > KF(0.0)) len = (g.shell_top - KZ(st.p)) / dz;
   if (hs > KF(0.0)) len = k_fmin(len, max_segment / hs);
-  len = k_fmax(len, KF(0.0));
-  h = knit_line_query(g, codes, colors, st.p, st.D, KF(0.0), len);
+  return k_fmax(len, KF(0.0));
+}
+
+/* One segment of length len along st.D (see knit_capm_segment); kx, ky: base
+ * curvature for the metric (0 when unknown). */
+KNIT_FN KnitCapm knit_capm_step_len(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+                                    KnitCapm in, float len, int max_steps, float kx, float ky) {
+  KnitCapm st = in;
+  float dz = KZ(st.D);
+  float eps = KF(1.0e-4) * g.shell_top;
+  float z = KZ(st.p) + len * dz;
+  float zm = KF(0.5) * (KZ(st.p) + z); /* metric at mid-segment height */
+  float mx = KF(1.0) / k_fmax(KF(1.0) + kx * zm, KF(0.1));
+  float my = KF(1.0) / k_fmax(KF(1.0) + ky * zm, KF(0.1));
+  /* The segment in pattern units: tangential travel shrinks by the metric. */
+  kvec3 dp = kv3(KX(st.D) * mx, KY(st.D) * my, dz);
+  float lp = kv3_len(dp);
+  KnitLineHit h;
+  if (st.state != KNIT_CAPM_MARCHING) return st;
+  h = knit_line_query(g, codes, colors, st.p, kv3_scale(dp, KF(1.0) / lp), KF(0.0), len * lp);
   st.steps = st.steps + 1;
   if (h.hit != 0) {
     st.state = KNIT_CAPM_HIT;
     st.hit = h;
     return st;
   }
-  {
-    float z = KZ(st.p) + len * dz;
-    float zm = KF(0.5) * (KZ(st.p) + z); /* metric at mid-segment height */
-    float mx = KF(1.0) / k_fmax(KF(1.0) + kx * zm, KF(0.1));
-    float my = KF(1.0) / k_fmax(KF(1.0) + ky * zm, KF(0.1));
-    st.p = kv3(KX(st.p) + len * KX(st.D) * mx, KY(st.p) + len * KY(st.D) * my, z);
-  }
+  st.p = kv3_madd(st.p, dp, len);
   if (KZ(st.p) <= eps - g.shell_top) st.state = KNIT_CAPM_THROUGH;
   else if (KZ(st.p) >= g.shell_top - eps && dz >= KF(0.0)) st.state = KNIT_CAPM_ESCAPED;
   else if (st.steps >= max_steps) st.state = KNIT_CAPM_LIMIT;
   return st;
+}
+
+KNIT_FN KnitCapm knit_capm_step(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+                                KnitCapm st, float max_segment, int max_steps, float kx, float ky) {
+  return knit_capm_step_len(g, codes, colors, st, knit_capm_segment(g, st, max_segment), max_steps,
+                            kx, ky);
+}
+
+/* Midpoint of the next segment (where a second-order march fetches the frame). */
+KNIT_FN kvec3 knit_capm_midpoint(KnitGeom g, KnitCapm st, float max_segment) {
+  return kv3_madd(st.p, st.D, KF(0.5) * knit_capm_segment(g, st, max_segment));
+}
+
+/* Use dir_local (the ray in the frame at the segment's midpoint) for the
+ * segment about to be marched: the midpoint rule, second order in the
+ * segment length on a curved base. */
+KNIT_FN KnitCapm knit_capm_aim(KnitCapm in, kvec3 dir_local) {
+  KnitCapm st = in;
+  if (st.state == KNIT_CAPM_MARCHING) st.D = kv3_normalize(dir_local);
+  return st;
+}
+
+/* Corrector for a segment that hit: `before` is the state the segment
+ * started from, `hit` the state after it. The host fetches the frame at
+ * knit_capm_hit_midpoint(before, hit) and passes the ray's direction in it;
+ * the segment is then re-marched to just past the hit with that direction,
+ * which is right to second order in the (shorter) distance to the hit. The
+ * original hit is kept if the re-marched segment misses. */
+KNIT_FN kvec3 knit_capm_hit_midpoint(KnitCapm before, KnitCapm hit) {
+  return kv3_madd(before.p, before.D, KF(0.5) * k_fmax(hit.hit.s_in, KF(0.0)));
+}
+KNIT_FN KnitCapm knit_capm_correct(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+                                   KnitCapm before, KnitCapm hit, kvec3 dir_local, float max_segment,
+                                   float kx, float ky) {
+  KnitCapm again = knit_capm_aim(before, dir_local);
+  float len = k_fmin(knit_capm_segment(g, again, max_segment),
+                     KF(1.5) * k_fmax(hit.hit.s_in, KF(0.0)) + g.r);
+  again = knit_capm_step_len(g, codes, colors, again, len, hit.steps + 1, kx, ky);
+  if (again.state != KNIT_CAPM_HIT) return hit;
+  again.steps = hit.steps;
+  return again;
 }
 
 /* Re-express the ray in the frame at the new point: the host passes the
@@ -120,16 +168,30 @@ KNIT_FN kvec3 knit_curved_frame_dir(kvec3 d0, float kx, float ky, float dx, floa
 
 /* The whole march on a base of constant curvature (flat: kx = ky = 0), for
  * hosts without a frame field (OSL uses this with the shading point's
- * curvature). */
+ * curvature). Midpoint rule: each segment uses the ray direction in the
+ * frame at its predicted midpoint. */
 KNIT_FN KnitCapm knit_capm_curved(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
                                   float x, float y, kvec3 wi_local, float kx, float ky,
                                   float max_segment, int max_steps) {
   KnitCapm st = knit_capm_begin(g, x, y, wi_local);
   kvec3 d0 = st.D;
+  int curved = (kx != KF(0.0) || ky != KF(0.0)) ? 1 : 0;
   int i;
   for (i = 0; i < max_steps && st.state == KNIT_CAPM_MARCHING; i++) {
+    KnitCapm before;
+    if (curved != 0) {
+      kvec3 m = knit_capm_midpoint(g, st, max_segment);
+      st = knit_capm_aim(st, knit_curved_frame_dir(d0, kx, ky, KX(m) - x, KY(m) - y));
+    }
+    before = st;
     st = knit_capm_step(g, codes, colors, st, max_segment, max_steps, kx, ky);
-    if (kx != KF(0.0) || ky != KF(0.0))
+    if (curved != 0 && st.state == KNIT_CAPM_HIT) {
+      kvec3 mh = knit_capm_hit_midpoint(before, st);
+      st = knit_capm_correct(g, codes, colors, before, st,
+                             knit_curved_frame_dir(d0, kx, ky, KX(mh) - x, KY(mh) - y), max_segment,
+                             kx, ky);
+    }
+    if (curved != 0)
       st = knit_capm_bend(g, st, knit_curved_frame_dir(d0, kx, ky, KX(st.p) - x, KY(st.p) - y));
   }
   return st;

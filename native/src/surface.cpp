@@ -1,6 +1,7 @@
 // KnitSurface: the host side of the analytic stitch queries and CAPM.
 #include "knit/surface.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -92,20 +93,35 @@ SurfaceHit KnitSurface::query(float x, float y) const {
 
 SurfaceHit KnitSurface::capm(float x, float y, Vec3 wi_local, const FrameProvider* frame,
                              const CapmOptions& opt) const {
-  static const FlatFrame flat;
-  const FrameProvider& fp = frame ? *frame : flat;
-  if (!(opt.max_steps >= 1) || !(opt.max_segment > 0))
-    throw std::invalid_argument("CapmOptions: max_steps must be >= 1 and max_segment > 0");
+  static const FlatFrame flat_frame;
+  const FrameProvider& fp = frame ? *frame : flat_frame;
+  if (!(opt.max_steps >= 1) || !(opt.max_segment > 0) || !(opt.max_bend > 0))
+    throw std::invalid_argument("CapmOptions: max_steps must be >= 1, max_segment and max_bend > 0");
   Vec3 t, b, n;
   fp.frame(x, y, t, b, n);
   const Vec3 wi = k::kv3_normalize(wi_local);
   const Vec3 ray_world = k::kv3_neg(k::kv3_from_local(wi, t, b, n));
   const Vec3 kappa = fp.curvature(x, y);
+  const float kmax = std::max(std::abs(kappa.x), std::abs(kappa.y));
+  const float seg = kmax > 0 ? std::min(opt.max_segment, opt.max_bend / kmax) : opt.max_segment;
   k::KnitCapm st = k::knit_capm_begin(geom_, x, y, wi);
+  const bool flat = frame == nullptr || dynamic_cast<const FlatFrame*>(frame) != nullptr;
   while (st.state == KNIT_CAPM_MARCHING) {
-    st = k::knit_capm_step(geom_, codes(), colors(), st, opt.max_segment, opt.max_steps, kappa.x,
+    if (!flat) {  // midpoint rule: aim the segment with the frame at its middle
+      const Vec3 m = k::knit_capm_midpoint(geom_, st, seg);
+      fp.frame(m.x, m.y, t, b, n);
+      st = k::knit_capm_aim(st, k::kv3_to_local(ray_world, t, b, n));
+    }
+    const k::KnitCapm before = st;
+    st = k::knit_capm_step(geom_, codes(), colors(), st, seg, opt.max_steps, kappa.x,
                            kappa.y);
-    if (st.state != KNIT_CAPM_MARCHING) break;
+    if (st.state == KNIT_CAPM_HIT && !flat) {
+      const Vec3 m = k::knit_capm_hit_midpoint(before, st);
+      fp.frame(m.x, m.y, t, b, n);
+      st = k::knit_capm_correct(geom_, codes(), colors(), before, st, k::kv3_to_local(ray_world, t, b, n),
+                                seg, kappa.x, kappa.y);
+    }
+    if (st.state != KNIT_CAPM_MARCHING || flat) continue;
     fp.frame(st.p.x, st.p.y, t, b, n);
     st = k::knit_capm_bend(geom_, st, k::kv3_to_local(ray_world, t, b, n));
   }

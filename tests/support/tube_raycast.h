@@ -67,7 +67,7 @@ class TubeScene {
         for (int i = n.first; i < n.first + n.count; ++i) hit_capsule(prims_[size_t(i)], o, d, tmin, best);
       } else {
         stack[sp++] = n.left;
-        stack[sp++] = n.left + 1;
+        stack[sp++] = n.right;
       }
     }
     best.hit = best.t < tmax && best.curve >= 0;
@@ -100,7 +100,7 @@ class TubeScene {
   };
   struct Node {
     D3 lo, hi;
-    int left = -1, first = 0, count = 0;
+    int left = -1, right = -1, first = 0, count = 0;
   };
 
   void prim_box(const Prim& p, D3& lo, D3& hi) const {
@@ -142,10 +142,10 @@ class TubeScene {
     };
     std::nth_element(prims_.begin() + first, prims_.begin() + mid, prims_.begin() + first + count,
                      [&](const Prim& a, const Prim& b) { return centre(a) < centre(b); });
-    const int left = int(nodes_.size());
-    build_node(first, mid - first);
-    build_node(mid, first + count - mid);
+    const int left = build_node(first, mid - first);
+    const int right = build_node(mid, first + count - mid);
     nodes_[size_t(idx)].left = left;
+    nodes_[size_t(idx)].right = right;
     return idx;
   }
 
@@ -256,7 +256,7 @@ class TubeScene {
       if (!in) continue;
       if (n.count == 0) {
         stack[sp++] = n.left;
-        stack[sp++] = n.left + 1;
+        stack[sp++] = n.right;
         continue;
       }
       for (int i = n.first; i < n.first + n.count; ++i) {

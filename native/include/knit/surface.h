@@ -81,8 +81,9 @@ class SphereFrame final : public FrameProvider {
 };
 
 struct CapmOptions {
-  int max_steps = 32;         // hard cap on marched segments
-  float max_segment = 6.2832f;  // longest segment, in pattern units of horizontal travel
+  int max_steps = 32;           // hard cap on marched segments
+  float max_segment = 6.2832f;  // longest segment, pattern units of horizontal travel
+  float max_bend = 0.05f;       // and at most this many radians of base curvature
 };
 
 class KnitSurface {
