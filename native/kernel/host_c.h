@@ -63,8 +63,12 @@ KNIT_FN kvec3 kv3(float x, float y, float z) {
 #define k_ceil(x) ceilf(x)
 #define k_fabs(x) fabsf(x)
 #define k_cbrt(x) cbrtf(x)
-#define k_fmin(a, b) fminf(a, b)
-#define k_fmax(a, b) fmaxf(a, b)
+/* Plain comparisons (not fminf/fmaxf, which are libm calls without
+ * -ffast-math); inputs are never NaN in the kernel. */
+KNIT_FN float knit_host_fmin(float a, float b) { return a < b ? a : b; }
+KNIT_FN float knit_host_fmax(float a, float b) { return a > b ? a : b; }
+#define k_fmin(a, b) knit_host_fmin(a, b)
+#define k_fmax(a, b) knit_host_fmax(a, b)
 #define k_isfinite(x) isfinite(x)
 
 #endif /* KNIT_KERNEL_HOST_C_H */

@@ -132,12 +132,12 @@ KNIT_FN KLineRel knit_line_rel(KCurve cv, kvec3 o, kvec3 D) {
 }
 
 /* Newton on the exact squared distance to the line. */
-KNIT_FN float knit_newton_closest(KnitGeom g, KNIT_ARRAY(int, codes), int k, kvec3 o, kvec3 D,
+KNIT_FN float knit_newton_closest(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, kvec3 o, kvec3 D,
                                   float t_start, int iters) {
   float t = t_start;
   int i;
   for (i = 0; i < iters; i++) {
-    KLineRel lr = knit_line_rel(knit_row_curve(g, codes, k, t), o, D);
+    KLineRel lr = knit_line_rel(knit_row_curve_at(g, codes, rw, t), o, D);
     if (lr.phi2 <= KF(0.0)) break;
     t = t - k_clampf(lr.phi1 / lr.phi2, KF(-0.4), KF(0.4));
   }
@@ -147,11 +147,11 @@ KNIT_FN float knit_newton_closest(KnitGeom g, KNIT_ARRAY(int, codes), int k, kve
 /* Maximise sgn * s(t) + w(t), w = sqrt(r^2 - rho^2): sgn = -1 gives the entry,
  * +1 the exit. Safeguarded Newton: a step that leaves the tube (rho >= r) or
  * lowers the objective is halved. Returns t; the caller re-evaluates. */
-KNIT_FN float knit_newton_extreme(KnitGeom g, KNIT_ARRAY(int, codes), int k, kvec3 o, kvec3 D,
+KNIT_FN float knit_newton_extreme(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, kvec3 o, kvec3 D,
                                   float t_start, float sgn, int iters) {
   float t = t_start;
   float r2 = g.r * g.r;
-  KLineRel lr = knit_line_rel(knit_row_curve(g, codes, k, t), o, D);
+  KLineRel lr = knit_line_rel(knit_row_curve_at(g, codes, rw, t), o, D);
   int i;
   if (lr.rho2 >= r2) return t;
   for (i = 0; i < iters; i++) {
@@ -167,7 +167,7 @@ KNIT_FN float knit_newton_extreme(KnitGeom g, KNIT_ARRAY(int, codes), int k, kve
     step = k_clampf(step, KF(-0.25), KF(0.25));
     if (k_fabs(step) < KF(1.0e-6)) break;
     for (tries = 0; tries < 4 && moved == 0; tries++) {
-      KLineRel nl = knit_line_rel(knit_row_curve(g, codes, k, t + step), o, D);
+      KLineRel nl = knit_line_rel(knit_row_curve_at(g, codes, rw, t + step), o, D);
       if (nl.rho2 < r2 && sgn * nl.s + k_sqrt(r2 - nl.rho2) >= f) {
         t = t + step;
         lr = nl;
@@ -185,62 +185,71 @@ KNIT_FN float knit_newton_extreme(KnitGeom g, KNIT_ARRAY(int, codes), int k, kve
  * closest point to the line). Fills s_in, s_out, t, p, n, tangent, row, col, code,
  * color; hit = 1 when the line does pass through the tube. */
 KNIT_FN KnitLineHit knit_crossing(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
-                                  int k, kvec3 o, kvec3 D, float t_close) {
+                                  KRow rw, kvec3 o, kvec3 D, float t_close, int need_exit) {
   KnitLineHit h = knit_line_hit_none();
   float r2 = g.r * g.r;
-  float t_in = knit_newton_extreme(g, codes, k, o, D, t_close, KF(-1.0), KNIT_NEWTON_EXTREME);
-  float t_out = knit_newton_extreme(g, codes, k, o, D, t_close, KF(1.0), KNIT_NEWTON_EXTREME);
-  KCurve ci = knit_row_curve(g, codes, k, t_in);
+  float t_in = knit_newton_extreme(g, codes, rw, o, D, t_close, KF(-1.0), KNIT_NEWTON_EXTREME);
+  KCurve ci = knit_row_curve_at(g, codes, rw, t_in);
   KLineRel li = knit_line_rel(ci, o, D);
-  KLineRel lo = knit_line_rel(knit_row_curve(g, codes, k, t_out), o, D);
   int c;
-  if (li.rho2 >= r2 || lo.rho2 >= r2) return h;
+  if (li.rho2 >= r2) return h;
+  if (need_exit != 0) {
+    float t_out = knit_newton_extreme(g, codes, rw, o, D, t_close, KF(1.0), KNIT_NEWTON_EXTREME);
+    KLineRel lo = knit_line_rel(knit_row_curve_at(g, codes, rw, t_out), o, D);
+    if (lo.rho2 >= r2) return h;
+    h.s_out = lo.s + k_sqrt(r2 - lo.rho2);
+  }
   h.hit = 1;
   h.s_in = li.s - k_sqrt(r2 - li.rho2);
-  h.s_out = lo.s + k_sqrt(r2 - lo.rho2);
   h.t = t_in;
   h.p = kv3_madd(o, D, h.s_in);
   h.n = kv3_normalize(kv3_sub(h.p, ci.p));
   h.tangent = kv3_normalize(ci.d1);
   c = knit_column_of(t_in);
-  h.row = k;
+  h.row = rw.k;
   h.col = c;
-  h.code = codes[knit_cell_index(g, k, c)];
-  h.color = colors[knit_cell_index(g, k, c)];
+  h.code = codes[rw.off + k_modi(c, g.cols)];
+  h.color = colors[rw.off + k_modi(c, g.cols)];
   return h;
 }
 
 /* First tube entry along o + s D with s in [s_min, s_max] (D unit), and the
- * number of tube crossings overlapping that range. */
+ * number of tube crossings overlapping that range. need_exit = 0 skips the
+ * exit search (s_out is then K_BIG and crossings counts entries up to s_max
+ * whose tube may reach s_min). */
 KNIT_FN KnitLineHit knit_line_query(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
-                                    kvec3 o, kvec3 D, float s_min, float s_max) {
+                                    kvec3 o, kvec3 D, float s_min, float s_max, int need_exit) {
   KnitLineHit best = knit_line_hit_none();
   kvec3 pa = kv3_madd(o, D, s_min), pb = kv3_madd(o, D, s_max);
+  float rr = g.r * KF(1.001) + KF(1.0e-4);
   float m = g.r + g.quad_margin;
   float xmin = k_fmin(KX(pa), KX(pb)), xmax = k_fmax(KX(pa), KX(pb));
   float ymin = k_fmin(KY(pa), KY(pb)), ymax = k_fmax(KY(pa), KY(pb));
-  int k0 = KINT(k_ceil((ymin - g.h - m) / g.row_spacing - KF(0.5)));
-  int k1 = KINT(k_floor((ymax + g.h + m) / g.row_spacing - KF(0.5)));
-  int g0 = KINT(k_floor((xmin - m - g.a) / KNIT_PIECE_LEN));
-  int g1 = KINT(k_floor((xmax + m + g.a) / KNIT_PIECE_LEN));
+  int k0 = KINT(k_ceil((ymin - g.h - rr) / g.row_spacing - KF(0.5)));
+  int k1 = KINT(k_floor((ymax + g.h + rr) / g.row_spacing - KF(0.5)));
+  float xa = g.has_floats != 0 ? k_fmax(g.a, KF(0.0)) : g.a;
+  int g0 = KINT(k_floor((xmin - rr - xa) / KNIT_PIECE_LEN));
+  int g1 = KINT(k_floor((xmax + rr + xa) / KNIT_PIECE_LEN));
   int count = 0;
   int k, gp;
   for (k = k0; k <= k1; k++) {
     float last_t = -K_BIG, prev_t = -K_BIG;
+    KRow rw = knit_row(g, k);
     for (gp = g0; gp <= g1; gp++) {
-      KBox bx = kbox_grow(knit_piece_bounds(g, codes, k, gp), m);
       KQuad q;
       kvec3 cu;
       float t;
       KnitLineHit h;
-      if (knit_segment_box(pa, pb, bx) == 0) continue;
-      q = knit_piece_quad(g, codes, k, gp);
+      /* Cheap cull first (no pattern lookups), then the exact piece box. */
+      if (knit_segment_box(pa, pb, kbox_grow(knit_piece_bounds_xy(g, rw.yk, gp), rr)) == 0) continue;
+      if (knit_segment_box(pa, pb, kbox_grow(knit_piece_bounds(g, codes, rw, gp), rr)) == 0) continue;
+      q = knit_piece_quad(g, codes, rw, gp);
       cu = knit_quad_closest(q, o, D);
       if (KY(cu) > m * m) continue;
-      t = knit_newton_closest(g, codes, k, o, D, q.t0 + KX(cu) * KNIT_PIECE_LEN,
+      t = knit_newton_closest(g, codes, rw, o, D, q.t0 + KX(cu) * KNIT_PIECE_LEN,
                               KNIT_NEWTON_CLOSEST);
       if (k_fabs(t - last_t) < KF(0.1) || k_fabs(t - prev_t) < KF(0.1)) continue;
-      h = knit_crossing(g, codes, colors, k, o, D, t);
+      h = knit_crossing(g, codes, colors, rw, o, D, t, need_exit);
       if (h.hit == 0) continue;
       prev_t = last_t;
       last_t = t;
@@ -259,7 +268,7 @@ KNIT_FN KnitLineHit knit_vertical_query(KnitGeom g, KNIT_ARRAY(int, codes), KNIT
                                         float x, float y) {
   float top = g.shell_top + KF(0.01);
   return knit_line_query(g, codes, colors, kv3(x, y, top), kv3(KF(0.0), KF(0.0), KF(-1.0)),
-                         KF(0.0), KF(2.0) * top);
+                         KF(0.0), KF(2.0) * top, 0);
 }
 
 #endif /* KNIT_KERNEL_QUERY_H */

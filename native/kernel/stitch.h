@@ -59,6 +59,9 @@ KNIT_STRUCT(KnitGeom)
   int rows, cols;     /* pattern size */
   int has_floats;     /* pattern uses codes 2 or 3 */
   float quad_margin;  /* bound on |quadratic interpolant - curve| over a piece */
+  /* x, y bounds of the 8 pieces of a cell relative to (t0 of the piece, row
+   * centre), for any code (see knit_piece_bounds_xy); filled by knit_geom_make. */
+  float pxlo[8], pxhi[8], pylo[8], pyhi[8];
 KNIT_STRUCT_END(KnitGeom)
 
 KNIT_FN KnitGeom knit_geom_make(float a, float h, float d, float r, int rows, int cols,
@@ -81,6 +84,32 @@ KNIT_FN KnitGeom knit_geom_make(float a, float h, float d, float r, int rows, in
    * measures the real maximum against this bound. */
   g.quad_margin = KF(2.0) * (KF(0.0311) * (g.a + k_fabs(g.d)) + KF(0.0039) * g.h) +
                   KF(0.05) * (has_floats ? g.float_depth + g.h : KF(0.0));
+  {
+    /* Piece j covers tau in [j pi/4 - pi, (j+1) pi/4 - pi]; over it sin 2tau is
+     * a monotone quarter period between 0 and +-1, cos tau monotone between
+     * -cos(j pi/4) and -cos((j+1) pi/4). */
+    float sn[5], cs[9];
+    int j;
+    sn[0] = KF(0.0); sn[1] = KF(1.0); sn[2] = KF(0.0); sn[3] = KF(-1.0); sn[4] = KF(0.0);
+    cs[0] = KF(-1.0); cs[1] = KF(-0.70710678118654752440); cs[2] = KF(0.0);
+    cs[3] = KF(0.70710678118654752440); cs[4] = KF(1.0); cs[5] = KF(0.70710678118654752440);
+    cs[6] = KF(0.0); cs[7] = KF(-0.70710678118654752440); cs[8] = KF(-1.0);
+    for (j = 0; j < 8; j++) {
+      float sa = a * sn[j % 4], sb = a * sn[j % 4 + 1];
+      float ya = h * cs[j], yb = h * cs[j + 1];
+      float xlo = sa < sb ? sa : sb, xhi = sa > sb ? sa : sb;
+      float ylo = ya < yb ? ya : yb;
+      if (has_floats != 0) {
+        xlo = xlo < KF(0.0) ? xlo : KF(0.0);
+        xhi = xhi > KF(0.0) ? xhi : KF(0.0);
+        ylo = -h;
+      }
+      g.pxlo[j] = xlo;
+      g.pxhi[j] = K_PI_4 + xhi;
+      g.pylo[j] = ylo;
+      g.pyhi[j] = ya > yb ? ya : yb;
+    }
+  }
   return g;
 }
 
@@ -95,6 +124,31 @@ KNIT_FN int knit_cell_code(KnitGeom g, KNIT_ARRAY(int, codes), int k, int c) {
 KNIT_FN int knit_column_of(float t) { return KINT(k_floor(t / K_2PI)); }
 KNIT_FN float knit_row_centre_y(KnitGeom g, int k) { return (KFLT(k) + KF(0.5)) * g.row_spacing; }
 
+/* A row with its pattern-row offsets precomputed (and those of the rows
+ * above and below, for the depth signs): evaluations along one row then need
+ * one modulo per column instead of six. */
+KNIT_STRUCT(KRow)
+  int k;                  /* row, counted from the bottom */
+  int off, off_up, off_dn; /* offsets into codes[] of rows k, k+1, k-1 */
+  float yk;               /* centre y of the row */
+KNIT_STRUCT_END(KRow)
+
+KNIT_FN KRow knit_row(KnitGeom g, int k) {
+  KRow rw;
+  rw.k = k;
+  rw.off = (g.rows - 1 - k_modi(k, g.rows)) * g.cols;
+  rw.off_up = (g.rows - 1 - k_modi(k + 1, g.rows)) * g.cols;
+  rw.off_dn = (g.rows - 1 - k_modi(k - 1, g.rows)) * g.cols;
+  rw.yk = knit_row_centre_y(g, k);
+  return rw;
+}
+
+/* What the geometry needs of a cell: its code and depth signs. */
+KNIT_STRUCT(KCell)
+  int code;
+  kvec3 sg; /* head, legs, sinker depth signs */
+KNIT_STRUCT_END(KCell)
+
 /* A point of a curve with its first and second derivative in t. */
 KNIT_STRUCT(KCurve)
   kvec3 p, d1, d2;
@@ -103,12 +157,17 @@ KNIT_STRUCT_END(KCurve)
 /* Depth signs (head, legs, sinker) of cell (k, c), see the file header. */
 KNIT_FN float knit_code_sign(int code) { return code == KNIT_CODE_PURL ? KF(-1.0) : KF(1.0); }
 KNIT_FN int knit_code_is_loop(int code) { return code == KNIT_CODE_KNIT || code == KNIT_CODE_PURL; }
-KNIT_FN kvec3 knit_cell_signs(KnitGeom g, KNIT_ARRAY(int, codes), int k, int c) {
-  float sl = knit_code_sign(knit_cell_code(g, codes, k, c));
-  int above = knit_cell_code(g, codes, k + 1, c);
-  int below = knit_cell_code(g, codes, k - 1, c);
-  return kv3(knit_code_is_loop(above) ? knit_code_sign(above) : sl, sl,
-             knit_code_is_loop(below) ? knit_code_sign(below) : sl);
+KNIT_FN KCell knit_cell(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, int c) {
+  KCell cl;
+  int cm = k_modi(c, g.cols);
+  int above = codes[rw.off_up + cm];
+  int below = codes[rw.off_dn + cm];
+  float sl;
+  cl.code = codes[rw.off + cm];
+  sl = knit_code_sign(cl.code);
+  cl.sg = kv3(knit_code_is_loop(above) ? knit_code_sign(above) : sl, sl,
+              knit_code_is_loop(below) ? knit_code_sign(below) : sl);
+  return cl;
 }
 
 /* Depth polynomial P(c) = (A + sl) c^2 + B c^3 - sl and its derivatives in
@@ -152,20 +211,18 @@ KNIT_FN kvec3 knit_blend_weight(float t, float tb) {
 }
 
 /* Whether two cells have the same profile (then no blend is needed). */
-KNIT_FN int knit_same_profile(int code, kvec3 sg, int ncode, kvec3 nsg) {
-  if (knit_code_is_loop(code) == 0 || knit_code_is_loop(ncode) == 0) return code == ncode;
-  return KX(sg) == KX(nsg) && KY(sg) == KY(nsg) && KZ(sg) == KZ(nsg);
+KNIT_FN int knit_same_profile(KCell a, KCell b) {
+  if (knit_code_is_loop(a.code) == 0 || knit_code_is_loop(b.code) == 0) return a.code == b.code;
+  return KX(a.sg) == KX(b.sg) && KY(a.sg) == KY(b.sg) && KZ(a.sg) == KZ(b.sg);
 }
 
-/* The exact yarn curve of row k at global parameter t (see the file header). */
-KNIT_FN KCurve knit_row_curve(KnitGeom g, KNIT_ARRAY(int, codes), int k, float t) {
+/* The exact yarn curve of a row at global parameter t (see the file header). */
+KNIT_FN KCurve knit_row_curve_at(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, float t) {
   int c = knit_column_of(t);
   float tc = K_2PI * KFLT(c) + K_PI;
   float tau = t - tc;
-  float yk = knit_row_centre_y(g, k);
-  int code = knit_cell_code(g, codes, k, c);
-  kvec3 sg = knit_cell_signs(g, codes, k, c);
-  KCurve self = knit_profile(g, code, sg, tau, tc, yk);
+  KCell cl = knit_cell(g, codes, rw, c);
+  KCurve self = knit_profile(g, cl.code, cl.sg, tau, tc, rw.yk);
   int nc = c;
   float tb = KF(0.0);
   if (tau > K_PI - KNIT_BLEND_HALF_WIDTH) {
@@ -177,13 +234,12 @@ KNIT_FN KCurve knit_row_curve(KnitGeom g, KNIT_ARRAY(int, codes), int k, float t
   }
   if (nc == c) return self;
   {
-    int ncode = knit_cell_code(g, codes, k, nc);
-    kvec3 nsg = knit_cell_signs(g, codes, k, nc);
+    KCell ncl = knit_cell(g, codes, rw, nc);
     float ntc = K_2PI * KFLT(nc) + K_PI;
     KCurve other, lo, hi, out;
     kvec3 w, dp, dd1, dd2;
-    if (knit_same_profile(code, sg, ncode, nsg)) return self;
-    other = knit_profile(g, ncode, nsg, t - ntc, ntc, yk);
+    if (knit_same_profile(cl, ncl)) return self;
+    other = knit_profile(g, ncl.code, ncl.sg, t - ntc, ntc, rw.yk);
     lo = nc > c ? self : other; /* the cell left of the boundary */
     hi = nc > c ? other : self;
     w = knit_blend_weight(t, tb);
@@ -195,6 +251,10 @@ KNIT_FN KCurve knit_row_curve(KnitGeom g, KNIT_ARRAY(int, codes), int k, float t
     out.d2 = kv3_madd(kv3_madd(kv3_madd(lo.d2, dd2, KX(w)), dd1, KF(2.0) * KY(w)), dp, KZ(w));
     return out;
   }
+}
+
+KNIT_FN KCurve knit_row_curve(KnitGeom g, KNIT_ARRAY(int, codes), int k, float t) {
+  return knit_row_curve_at(g, codes, knit_row(g, k), t);
 }
 
 /* cos(m pi / 8) and sin(m pi / 8) for any integer m, without libm. */
@@ -272,27 +332,39 @@ KNIT_FN KBox knit_profile_piece_bounds(KnitGeom g, int code, kvec3 sg, int j, fl
   return b;
 }
 
+/* Bounds of row k's curve over global piece gp in x and y only, without
+ * looking at the pattern: x and y of knit and purl profiles do not depend on
+ * the code (nor on a blend between them); slip-stitch floats lie on
+ * y = y_k - h, x = t. z is bounded by the depth of the deepest profile. */
+KNIT_FN KBox knit_piece_bounds_xy(KnitGeom g, float yk, int gp) {
+  KBox b;
+  int j = gp & 7;
+  float t0 = KFLT(gp) * K_PI_4;
+  float zmax = g.has_floats != 0 ? g.float_depth : k_fabs(g.d);
+  b.lo = kv3(t0 + g.pxlo[j], yk + g.pylo[j], -zmax);
+  b.hi = kv3(t0 + g.pxhi[j], yk + g.pyhi[j], zmax);
+  return b;
+}
+
 /* The cell and code of the neighbour a piece blends with (or the cell itself). */
 KNIT_FN int knit_piece_neighbour(int j) { return j == 0 ? -1 : (j == 7 ? 1 : 0); }
 
 /* Conservative bounds of the exact curve of row k over global piece gp. A
  * blended piece lies in the union of both profiles' boxes (convex weights). */
-KNIT_FN KBox knit_piece_bounds(KnitGeom g, KNIT_ARRAY(int, codes), int k, int gp) {
+KNIT_FN KBox knit_piece_bounds(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, int gp) {
   int c = KINT(k_floor(KFLT(gp) / KF(8.0)));
   int j = gp - 8 * c;
-  float tc = K_2PI * KFLT(c) + K_PI, yk = knit_row_centre_y(g, k);
-  int code = knit_cell_code(g, codes, k, c);
-  kvec3 sg = knit_cell_signs(g, codes, k, c);
-  KBox b = knit_profile_piece_bounds(g, code, sg, j, tc, yk);
+  float tc = K_2PI * KFLT(c) + K_PI, yk = rw.yk;
+  KCell cl = knit_cell(g, codes, rw, c);
+  KBox b = knit_profile_piece_bounds(g, cl.code, cl.sg, j, tc, yk);
   int dn = knit_piece_neighbour(j);
   if (dn != 0) {
-    int ncode = knit_cell_code(g, codes, k, c + dn);
-    kvec3 nsg = knit_cell_signs(g, codes, k, c + dn);
-    if (knit_same_profile(code, sg, ncode, nsg) == 0) {
+    KCell ncl = knit_cell(g, codes, rw, c + dn);
+    if (knit_same_profile(cl, ncl) == 0) {
       /* The neighbour's profile over the same t range: its piece 8 (just past
        * its right end) when it is on the left, piece -1 when on the right. */
       float ntc = tc + KFLT(dn) * K_2PI;
-      KBox nb = knit_profile_piece_bounds(g, ncode, nsg, dn < 0 ? 8 : -1, ntc, yk);
+      KBox nb = knit_profile_piece_bounds(g, ncl.code, ncl.sg, dn < 0 ? 8 : -1, ntc, yk);
       b.lo = kv3(k_fmin(KX(b.lo), KX(nb.lo)), k_fmin(KY(b.lo), KY(nb.lo)), k_fmin(KZ(b.lo), KZ(nb.lo)));
       b.hi = kv3(k_fmax(KX(b.hi), KX(nb.hi)), k_fmax(KY(b.hi), KY(nb.hi)), k_fmax(KZ(b.hi), KZ(nb.hi)));
     }
@@ -317,24 +389,22 @@ KNIT_FN KQuad knit_quad_from_nodes(kvec3 f0, kvec3 f1, kvec3 f2, float t0) {
   return q;
 }
 
-KNIT_FN KQuad knit_piece_quad(KnitGeom g, KNIT_ARRAY(int, codes), int k, int gp) {
+KNIT_FN KQuad knit_piece_quad(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, int gp) {
   int c = KINT(k_floor(KFLT(gp) / KF(8.0)));
   int j = gp - 8 * c;
   float t0 = KFLT(gp) * K_PI_4;
   int dn = knit_piece_neighbour(j);
-  int code = knit_cell_code(g, codes, k, c);
-  kvec3 sg = knit_cell_signs(g, codes, k, c);
-  if (dn == 0 || knit_same_profile(code, sg, knit_cell_code(g, codes, k, c + dn),
-                                   knit_cell_signs(g, codes, k, c + dn))) {
-    float tc = K_2PI * KFLT(c) + K_PI, yk = knit_row_centre_y(g, k);
-    return knit_quad_from_nodes(knit_profile_node(g, code, sg, 2 * j, tc, yk),
-                                knit_profile_node(g, code, sg, 2 * j + 1, tc, yk),
-                                knit_profile_node(g, code, sg, 2 * j + 2, tc, yk), t0);
+  KCell cl = knit_cell(g, codes, rw, c);
+  if (dn == 0 || knit_same_profile(cl, knit_cell(g, codes, rw, c + dn))) {
+    float tc = K_2PI * KFLT(c) + K_PI;
+    return knit_quad_from_nodes(knit_profile_node(g, cl.code, cl.sg, 2 * j, tc, rw.yk),
+                                knit_profile_node(g, cl.code, cl.sg, 2 * j + 1, tc, rw.yk),
+                                knit_profile_node(g, cl.code, cl.sg, 2 * j + 2, tc, rw.yk), t0);
   }
   /* Blended piece: interpolate the exact (blended) curve. */
-  return knit_quad_from_nodes(knit_row_curve(g, codes, k, t0).p,
-                              knit_row_curve(g, codes, k, t0 + KF(0.5) * K_PI_4).p,
-                              knit_row_curve(g, codes, k, t0 + K_PI_4).p, t0);
+  return knit_quad_from_nodes(knit_row_curve_at(g, codes, rw, t0).p,
+                              knit_row_curve_at(g, codes, rw, t0 + KF(0.5) * K_PI_4).p,
+                              knit_row_curve_at(g, codes, rw, t0 + K_PI_4).p, t0);
 }
 
 KNIT_FN kvec3 knit_quad_eval(KQuad q, float x) {

@@ -66,7 +66,7 @@ std::vector<TubeCrossing> KnitSurface::crossings(float x, float y) const {
   const Vec3 o = k::kv3(x, y, top), D = k::kv3(0, 0, -1);
   float s_min = 0;
   for (int guard = 0; guard < 16; ++guard) {
-    k::KnitLineHit h = k::knit_line_query(geom_, codes(), colors(), o, D, s_min, 2 * top);
+    k::KnitLineHit h = k::knit_line_query(geom_, codes(), colors(), o, D, s_min, 2 * top, 1);
     if (!h.hit) break;
     out.push_back(to_crossing(h));
     s_min = h.s_in + 1e-4f;

@@ -78,7 +78,7 @@ TEST(Stitch, PieceBoundsContainTheCurve) {
     KnitSurface s = make(pat, sp);
     for (int row = -2; row < 4; ++row)
       for (int gp = -16; gp < 80; ++gp) {
-        k::KBox b = k::knit_piece_bounds(s.geom(), s.codes(), row, gp);
+        k::KBox b = k::knit_piece_bounds(s.geom(), s.codes(), k::knit_row(s.geom(), row), gp);
         for (int i = 0; i <= 64; ++i) {
           double t = (gp + i / 64.0) * kPi / 4;
           CurvePoint c = yarn_curve_exact(pat, sp, row, t);
@@ -103,7 +103,7 @@ TEST(Stitch, QuadraticInterpolantErrorWithinBound) {
     double worst[3] = {0, 0, 0}, worst_plain = 0, worst_blend = 0;
     for (int row = 0; row < 2; ++row)
       for (int gp = 0; gp < 64; ++gp) {
-        k::KQuad q = k::knit_piece_quad(s.geom(), s.codes(), row, gp);
+        k::KQuad q = k::knit_piece_quad(s.geom(), s.codes(), k::knit_row(s.geom(), row), gp);
         const bool blend = (gp % 8 == 0 || gp % 8 == 7);
         for (int i = 0; i <= 200; ++i) {
           const double u = i / 200.0;

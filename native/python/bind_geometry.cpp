@@ -1,0 +1,346 @@
+// Python bindings of the stitch geometry: StitchParams, KnitSurface (query,
+// crossings, capm), frames and explicit_yarns. Inputs are validated here, at
+// the boundary; errors are ValueError naming the argument, index and value.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include "bindings.h"
+#include "knit/surface.h"
+#include "knit/yarns.h"
+
+namespace py = pybind11;
+
+namespace knit::py {
+namespace {
+
+using Arr = ::py::array_t<double, ::py::array::c_style | ::py::array::forcecast>;
+
+std::string num(double v) {
+  std::ostringstream o;
+  o << v;
+  return o.str();
+}
+
+void check_finite(const char* what, const double* p, ssize_t n) {
+  for (ssize_t i = 0; i < n; ++i)
+    if (!std::isfinite(p[i]))
+      throw ::py::value_error(std::string(what) + "[" + std::to_string(i) + "] must be finite, got " +
+                              num(p[i]));
+}
+
+// Broadcast u and v (scalars or 1-D arrays of one length) to N points.
+struct Points {
+  Arr u, v;
+  ssize_t n;
+  const double* pu;
+  const double* pv;
+  bool su, sv;
+};
+
+Points points(const Arr& u, const Arr& v) {
+  if (u.ndim() > 1 || v.ndim() > 1) throw ::py::value_error("u and v must be scalars or 1-D arrays");
+  const ssize_t nu = u.size(), nv = v.size();
+  if (nu != nv && nu != 1 && nv != 1)
+    throw ::py::value_error("u and v must have the same length, got " + std::to_string(nu) + " and " +
+                            std::to_string(nv));
+  check_finite("u", u.data(), nu);
+  check_finite("v", v.data(), nv);
+  return {u, v, std::max(nu, nv), u.data(), v.data(), nu == 1, nv == 1};
+}
+
+::py::array_t<double> vec_array(ssize_t n) { return ::py::array_t<double>({n, ssize_t(3)}); }
+
+void put(double* row, const Vec3& a) {
+  row[0] = a.x;
+  row[1] = a.y;
+  row[2] = a.z;
+}
+
+class PyKnitSurface {
+ public:
+  PyKnitSurface(const Pattern& p, const StitchParams& sp, double uv_scale)
+      : surf_(p, sp), uv_scale_(uv_scale) {
+    if (!std::isfinite(uv_scale) || uv_scale <= 0)
+      throw ::py::value_error("uv_scale must be finite and > 0, got " + num(uv_scale));
+  }
+
+  ::py::dict query(const Arr& u, const Arr& v) const {
+    Points P = points(u, v);
+    const ssize_t n = P.n;
+    ::py::array_t<bool> hit(n);
+    ::py::array_t<double> z(n), pos = vec_array(n), nor = vec_array(n), tan = vec_array(n);
+    ::py::array_t<int> layers(n), stitch(n), color(n), row(n), col(n);
+    {
+      ::py::gil_scoped_release nogil;
+      auto H = hit.mutable_unchecked<1>();
+      auto Z = z.mutable_unchecked<1>();
+      for (ssize_t i = 0; i < n; ++i) {
+        const float x = float(uv_scale_ * P.pu[P.su ? 0 : i]), y = float(uv_scale_ * P.pv[P.sv ? 0 : i]);
+        const SurfaceHit h = surf_.query(x, y);
+        H(i) = h.hit;
+        Z(i) = h.hit ? h.position.z : std::nan("");
+        put(pos.mutable_data(i, 0), h.hit ? h.position : Vec3{x, y, std::nanf("")});
+        put(nor.mutable_data(i, 0), h.normal);
+        put(tan.mutable_data(i, 0), h.tangent);
+        layers.mutable_data()[i] = h.layers;
+        stitch.mutable_data()[i] = h.hit ? h.stitch : -1;
+        color.mutable_data()[i] = h.hit ? h.color : -1;
+        row.mutable_data()[i] = h.row;
+        col.mutable_data()[i] = h.col;
+      }
+    }
+    ::py::dict d;
+    d["hit"] = hit;
+    d["z"] = z;
+    d["position"] = pos;
+    d["normal"] = nor;
+    d["tangent"] = tan;
+    d["layers"] = layers;
+    d["stitch"] = stitch;
+    d["color"] = color;
+    d["row"] = row;
+    d["col"] = col;
+    return d;
+  }
+
+  ::py::list crossings(double u, double v) const {
+    if (!std::isfinite(u) || !std::isfinite(v))
+      throw ::py::value_error("u and v must be finite, got " + num(u) + ", " + num(v));
+    const float x = float(uv_scale_ * u), y = float(uv_scale_ * v);
+    const float top = surf_.shell_top() + 0.01f;
+    ::py::list out;
+    for (const TubeCrossing& c : surf_.crossings(x, y)) {
+      ::py::dict d;
+      d["z_top"] = top - c.s_in;
+      d["z_bottom"] = top - c.s_out;
+      d["normal"] = ::py::make_tuple(c.normal.x, c.normal.y, c.normal.z);
+      d["tangent"] = ::py::make_tuple(c.tangent.x, c.tangent.y, c.tangent.z);
+      d["row"] = c.row;
+      d["col"] = c.col;
+      d["layer"] = c.layer;
+      d["stitch"] = c.stitch;
+      d["color"] = c.color;
+      d["t"] = c.t;
+      out.append(d);
+    }
+    return out;
+  }
+
+  ::py::dict capm(const Arr& u, const Arr& v, const Arr& wi, const FrameProvider* frame, int max_steps,
+                  double max_segment, double max_bend) const {
+    Points P = points(u, v);
+    if (!(wi.ndim() == 1 && wi.shape(0) == 3) && !(wi.ndim() == 2 && wi.shape(1) == 3))
+      throw ::py::value_error("wi_local must have shape (3,) or (N, 3)");
+    const ssize_t nw = wi.ndim() == 1 ? 1 : wi.shape(0);
+    if (nw != 1 && P.n != 1 && nw != P.n)
+      throw ::py::value_error("wi_local has " + std::to_string(nw) + " rows but u, v have " +
+                              std::to_string(P.n) + " points");
+    check_finite("wi_local", wi.data(), wi.size());
+    for (ssize_t i = 0; i < nw; ++i) {
+      const double* w = wi.data() + 3 * i;
+      if (!(w[2] > 0))
+        throw ::py::value_error("wi_local[" + std::to_string(i) +
+                                "] must point away from the surface (z > 0), got z = " + num(w[2]));
+    }
+    if (max_steps < 1 || max_steps > 4096)
+      throw ::py::value_error("max_steps must be in [1, 4096], got " + std::to_string(max_steps));
+    if (!(max_segment > 0) || !std::isfinite(max_segment))
+      throw ::py::value_error("max_segment must be finite and > 0, got " + num(max_segment));
+    if (!(max_bend > 0) || !std::isfinite(max_bend))
+      throw ::py::value_error("max_bend must be finite and > 0, got " + num(max_bend));
+    CapmOptions opt;
+    opt.max_steps = max_steps;
+    opt.max_segment = float(max_segment);
+    opt.max_bend = float(max_bend);
+    const ssize_t n = std::max(P.n, nw);
+    ::py::array_t<bool> hit(n);
+    ::py::array_t<double> pos = vec_array(n), nor = vec_array(n), tan = vec_array(n);
+    ::py::array_t<int> layers(n), steps(n), stitch(n), color(n), row(n), col(n);
+    {
+      ::py::gil_scoped_release nogil;
+      for (ssize_t i = 0; i < n; ++i) {
+        const float x = float(uv_scale_ * P.pu[P.su ? 0 : i]), y = float(uv_scale_ * P.pv[P.sv ? 0 : i]);
+        const double* w = wi.data() + 3 * (nw == 1 ? 0 : i);
+        const SurfaceHit h = surf_.capm(x, y, k::kv3(float(w[0]), float(w[1]), float(w[2])), frame, opt);
+        hit.mutable_data()[i] = h.hit;
+        const float nan = std::nanf("");
+        put(pos.mutable_data(i, 0), h.hit ? h.position : Vec3{nan, nan, nan});
+        put(nor.mutable_data(i, 0), h.normal);
+        put(tan.mutable_data(i, 0), h.tangent);
+        layers.mutable_data()[i] = h.layers;
+        steps.mutable_data()[i] = h.steps;
+        stitch.mutable_data()[i] = h.hit ? h.stitch : -1;
+        color.mutable_data()[i] = h.hit ? h.color : -1;
+        row.mutable_data()[i] = h.row;
+        col.mutable_data()[i] = h.col;
+      }
+    }
+    ::py::dict d;
+    d["hit"] = hit;
+    d["position"] = pos;
+    d["normal"] = nor;
+    d["tangent"] = tan;
+    d["layers"] = layers;
+    d["steps"] = steps;
+    d["stitch"] = stitch;
+    d["color"] = color;
+    d["row"] = row;
+    d["col"] = col;
+    return d;
+  }
+
+  const KnitSurface& surface() const { return surf_; }
+  double uv_scale() const { return uv_scale_; }
+
+ private:
+  KnitSurface surf_;
+  double uv_scale_;
+};
+
+StitchParams make_params(float a, float h, float d, float r) {
+  StitchParams p;
+  p.a = a;
+  p.h = h;
+  p.d = d;
+  p.r = r;
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    throw ::py::value_error(e.what());
+  }
+  return p;
+}
+
+}  // namespace
+
+void bind_geometry(::py::module_& m) {
+  ::py::class_<StitchParams>(m, "StitchParams", R"doc(
+Parameters of Crane's plain-knit stitch curve (paper Eq. 2),
+Y(t) = (t + a sin 2t, h cos t, d cos 2t), swept by a tube of radius r.
+Validated on construction: finite, a > 0, h > 0, d != 0, r > 0 and r at most
+half the yarn clearance (tubes must not pass through each other); a
+ValueError names the parameter and value at fault.)doc")
+      .def(::py::init(&make_params), ::py::arg("a") = 1.5f, ::py::arg("h") = 4.0f, ::py::arg("d") = 1.0f,
+           ::py::arg("r") = 0.65f)
+      .def_readonly("a", &StitchParams::a)
+      .def_readonly("h", &StitchParams::h)
+      .def_readonly("d", &StitchParams::d)
+      .def_readonly("r", &StitchParams::r)
+      .def_property_readonly("row_spacing", &StitchParams::row_spacing)
+      .def("clearance", &StitchParams::clearance,
+           "Smallest distance between the centre lines of two different yarn pieces.")
+      .def("__repr__", &StitchParams::to_string);
+
+  ::py::class_<FrameProvider>(m, "FrameProvider",
+                              "Base-mesh frame field used by CAPM to bend rays (abstract).");
+  ::py::class_<FlatFrame, FrameProvider>(m, "FlatFrame", "A flat base: the frame is the same everywhere.")
+      .def(::py::init<>());
+  ::py::class_<CylinderFrame, FrameProvider>(m, "CylinderFrame", R"doc(
+A cylinder of the given radius (pattern units) around the y axis: x is arc
+length around it at the yarn centre surface (z = 0), y runs along the axis.)doc")
+      .def(::py::init([](float radius) {
+             if (!std::isfinite(radius) || radius <= 0)
+               throw ::py::value_error("radius must be finite and > 0, got " + num(radius));
+             return CylinderFrame(radius);
+           }),
+           ::py::arg("radius"))
+      .def_property_readonly("radius", &CylinderFrame::radius);
+  ::py::class_<SphereFrame, FrameProvider>(m, "SphereFrame",
+                                           "A sphere: x = R * longitude, y = R * latitude.")
+      .def(::py::init([](float radius) {
+             if (!std::isfinite(radius) || radius <= 0)
+               throw ::py::value_error("radius must be finite and > 0, got " + num(radius));
+             return SphereFrame(radius);
+           }),
+           ::py::arg("radius"))
+      .def_property_readonly("radius", &SphereFrame::radius);
+
+  ::py::class_<PyKnitSurface>(m, "KnitSurface", R"doc(
+A knit pattern with stitch parameters, queried analytically.
+
+Pattern space: x along the course, y along the wale, z out of the fabric, in
+stitch-curve units. A stitch cell is 2*pi wide and `row_spacing` (h + 1/2)
+tall; cell (k, c) - row k counted from the BOTTOM of the pattern (pattern
+rows are written top first), column c - spans x in [2 pi c, 2 pi (c+1)),
+y in [k s, (k+1) s); the pattern repeats in both directions. UV coordinates
+map to pattern space by x = uv_scale * u, y = uv_scale * v (default 1: u, v
+are pattern-space coordinates). All results are in pattern space, the same
+coordinates explicit_yarns() returns.)doc")
+      .def(::py::init<const Pattern&, const StitchParams&, double>(), ::py::arg("pattern"),
+           ::py::arg("params") = StitchParams{}, ::py::arg("uv_scale") = 1.0)
+      .def_property_readonly("shell_top", [](const PyKnitSurface& s) { return s.surface().shell_top(); },
+                             "Highest z any yarn tube reaches (|d| + r; more with slip-stitch floats). "
+                             "CAPM rays enter at this height.")
+      .def_property_readonly("uv_scale", &PyKnitSurface::uv_scale)
+      .def_property_readonly("cell_width", [](const PyKnitSurface& s) { return s.surface().cell_width(); })
+      .def_property_readonly("cell_height", [](const PyKnitSurface& s) { return s.surface().cell_height(); })
+      .def_property_readonly("period", [](const PyKnitSurface& s) {
+        return ::py::make_tuple(s.surface().period_x(), s.surface().period_y());
+      })
+      .def_property_readonly("params", [](const PyKnitSurface& s) { return s.surface().params(); })
+      .def("query", &PyKnitSurface::query, ::py::arg("u"), ::py::arg("v"), R"doc(
+Vertical (height) query at UV points, vectorised: the first yarn surface seen
+from above along the line through (uv_scale*u, uv_scale*v). Returns a dict of
+arrays: hit (bool), z (height of that surface, nan on a miss), position (N,3),
+normal (N,3, outward tube normal), tangent (N,3, unit yarn direction), layers
+(number of tubes the vertical line crosses), stitch (code, -1 on a miss),
+color (colour index, -1 on a miss), row, col (cell of the yarn hit).)doc")
+      .def("crossings", &PyKnitSurface::crossings, ::py::arg("u"), ::py::arg("v"), R"doc(
+Every yarn tube crossed by the vertical line at one UV point, top first: a
+list of dicts with z_top and z_bottom (entry and exit heights), normal and
+tangent at the top, row, col, layer (row parity), stitch, color and t.)doc")
+      .def("capm", &PyKnitSurface::capm, ::py::arg("u"), ::py::arg("v"), ::py::arg("wi_local"),
+           ::py::arg("frame") = nullptr, ::py::arg("max_steps") = 32, ::py::arg("max_segment") = 6.2832,
+           ::py::arg("max_bend") = 0.05, R"doc(
+Curvature-aware parallax march (paper Alg. 1, done with exact segment
+queries): the view ray enters the yarn shell at (uv_scale*u, uv_scale*v,
+shell_top) travelling along -wi_local; wi_local (shape (3,) or (N,3), z > 0)
+points from the surface towards the viewer in the local frame at (u, v).
+`frame` (FlatFrame by default, CylinderFrame, SphereFrame) bends the ray with
+the base surface. Returns a dict of arrays: hit, position (N,3, pattern
+space), normal, tangent, layers (tubes crossed by the vertical line through
+the hit), steps (segments marched), stitch, color, row, col.)doc");
+
+  m.def(
+      "explicit_yarns",
+      [](const Pattern& p, const StitchParams& sp, int tiles_u, int tiles_v, int samples_per_stitch) {
+        ExplicitYarns y;
+        try {
+          y = explicit_yarns(p, sp, tiles_u, tiles_v, samples_per_stitch);
+        } catch (const std::invalid_argument& e) {
+          throw ::py::value_error(e.what());
+        }
+        ::py::list curves, colors, rows;
+        for (const YarnCurve& c : y.curves) {
+          ::py::array_t<double> a({ssize_t(c.points.size()), ssize_t(3)});
+          for (size_t i = 0; i < c.points.size(); ++i)
+            for (int k = 0; k < 3; ++k) a.mutable_data(ssize_t(i), k)[0] = c.points[i][size_t(k)];
+          curves.append(a);
+          colors.append(::py::array_t<int>(ssize_t(c.color.size()), c.color.data()));
+          rows.append(c.row);
+        }
+        ::py::dict d;
+        d["curves"] = curves;
+        d["colors"] = colors;
+        d["rows"] = rows;
+        d["radius"] = y.radius;
+        d["width"] = y.width;
+        d["height"] = y.height;
+        return d;
+      },
+      ::py::arg("pattern"), ::py::arg("params") = StitchParams{}, ::py::arg("tiles_u") = 1,
+      ::py::arg("tiles_v") = 1, ::py::arg("samples_per_stitch") = 64, R"doc(
+The exact yarn centre curves of tiles_u x tiles_v repeats of the pattern, in
+the pattern-space coordinates KnitSurface.query and capm use (one dense
+polyline per knitted row, row 0 at the bottom), with the tube radius. Returns
+a dict: curves (list of (M,3) arrays), colors (list of per-point colour
+index arrays), rows, radius, width, height.)doc");
+}
+
+}  // namespace knit::py
