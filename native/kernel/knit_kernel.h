@@ -9,5 +9,6 @@
 #include "stitch.h"
 #include "query.h"
 #include "capm.h"
+#include "multiscale.h"
 
 #endif /* KNIT_KERNEL_H */

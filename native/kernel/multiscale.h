@@ -1,0 +1,172 @@
+/* Knitshade kernel: multi-scale aggregation over a pixel's footprint.
+ *
+ * Paper Sec. 5.1 and 6.2. A camera ray's footprint on the fabric, from its
+ * ray differentials, is the parallelogram spanned in pattern space by
+ * (dx/dpx, dy/dpx) and (dx/dpy, dy/dpy) around the hit point. N points of a
+ * 2D Sobol' sequence (Cranley-Patterson shifted per shading point) are placed
+ * over it; each is marched with CAPM along the same view direction and the
+ * results are aggregated:
+ *   p_delta   fraction of the footprint the ray passes through (misses),
+ *   normal    mean normal of the yarn surface hit, in the base frame,
+ *   sigma     LEAN covariance (Olano and Baker 2010, paper Eq. 10) of the hit
+ *             normals' slopes (n.x/n.z, n.y/n.z) around their mean, to be added
+ *             to the specular lobe's own slope covariance (paper Eq. 11),
+ *   tangent   mean yarn tangent (sign-aligned), for the anisotropic lobe,
+ *   layers    mean tube count under the hits (double-layer attenuation),
+ *   color_w   share of hits per colour index (up to KNIT_MS_COLORS).
+ * As the footprint shrinks to a point every sample is the same CAPM ray, so
+ * the result is the near-field hit (sigma = 0, p_delta 0 or 1).
+ *
+ * Footprints of a stitch cell or more: the yarn repeats cell by cell, so
+ * what matters for a footprint's average is where inside a cell each point
+ * lands, then which cells. Points are therefore placed cell-stratified: the
+ * Sobol' point gives the position inside a cell (a (0,2)-net over the cell),
+ * an additive recurrence on the golden ratio picks the cell among those the
+ * footprint's bounding box covers. On a uniform pattern the aggregate then
+ * no longer depends on where the footprint lies, only on its size; and the
+ * point count grows with the number of cells covered (x n_points per 16
+ * cells, up to KNIT_MS_MAX_POINTS), so mixed patterns average too.
+ *
+ * Slopes of grazing normals are clamped at KNIT_MS_MAX_SLOPE (normal z >=
+ * 0.24): the LEAN covariance of a field of round tubes is otherwise dominated
+ * by a few silhouette samples. */
+#ifndef KNIT_KERNEL_MULTISCALE_H
+#define KNIT_KERNEL_MULTISCALE_H
+
+#define KNIT_MS_MAX_POINTS 64
+#define KNIT_MS_COLORS 8
+#define KNIT_MS_MAX_SLOPE KF(4.0)
+
+KNIT_STRUCT(KnitAggregate)
+  int n;            /* footprint points marched */
+  int hits;         /* of which hit a yarn */
+  float p_delta;    /* (n - hits) / n */
+  kvec3 normal;     /* mean hit normal (unit), base frame */
+  kvec3 tangent;    /* mean yarn tangent (unit), base frame */
+  float sxx, sxy, syy; /* LEAN slope covariance of the hit normals */
+  float layers;     /* mean tube count under the hits */
+  float steps;      /* mean CAPM segments per point */
+  float color_w[KNIT_MS_COLORS]; /* share of hits per colour index (last bin: >= 7) */
+  kvec3 position;   /* mean hit position (pattern space) */
+KNIT_STRUCT_END(KnitAggregate)
+
+/* Point i of the 2D Sobol' sequence in [0,1)^2, 24-bit: the first dimension
+ * is the base-2 radical inverse, the second uses Sobol's direction numbers
+ * v_k = v_{k-1} xor (v_{k-1} >> 1). KZ is unused. */
+KNIT_FN kvec3 knit_sobol2(int i) {
+  int x = 0, y = 0;
+  int v = 8388608; /* 1 << 23 */
+  int vy = 8388608;
+  int b = i;
+  int bit;
+  for (bit = 0; bit < 24 && b != 0; bit++) {
+    if ((b & 1) != 0) {
+      x = x ^ v;
+      y = y ^ vy;
+    }
+    b = b >> 1;
+    v = v >> 1;
+    vy = vy ^ (vy >> 1);
+  }
+  return kv3(KFLT(x) / KF(16777216.0), KFLT(y) / KF(16777216.0), KF(0.0));
+}
+
+KNIT_FN float knit_frac(float x) { return x - k_floor(x); }
+
+/* Aggregates n_points CAPM marches over the footprint centred at (x, y).
+ * fx = (dx/dpx, dy/dpx), fy = (dx/dpy, dy/dpy) in pattern units (KZ unused);
+ * shift_x/y in [0,1): per-shading-point Cranley-Patterson shift. The base is
+ * of constant curvature (kx, ky) (flat: 0); every footprint point uses the
+ * same local view direction wi_local (the frame is treated as constant across
+ * the footprint, which the footprint's smallness justifies). */
+KNIT_FN KnitAggregate knit_aggregate(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+                                     float x, float y, kvec3 fx, kvec3 fy, kvec3 wi_local,
+                                     int n_points, float shift_x, float shift_y, float kx, float ky,
+                                     float max_segment, int max_steps) {
+  KnitAggregate a;
+  float cw = K_2PI, ch = g.row_spacing;
+  float ex = (k_fabs(KX(fx)) + k_fabs(KX(fy))) / cw; /* footprint box, in cells */
+  float ey = (k_fabs(KY(fx)) + k_fabs(KY(fy))) / ch;
+  int stratified = (ex >= KF(1.0) && ey >= KF(1.0)) ? 1 : 0;
+  int ncx = KINT(k_floor(ex)), ncy = KINT(k_floor(ey));
+  int bx0 = KINT(k_floor((x - KF(0.5) * ex * cw) / cw + KF(0.5) * (ex - KFLT(ncx))));
+  int by0 = KINT(k_floor((y - KF(0.5) * ey * ch) / ch + KF(0.5) * (ey - KFLT(ncy))));
+  int n = k_maxi(1, k_mini(n_points, KNIT_MS_MAX_POINTS));
+  int i, c;
+  float sx = KF(0.0), sy = KF(0.0), sxx = KF(0.0), sxy = KF(0.0), syy = KF(0.0);
+  kvec3 nsum = kv3(KF(0.0), KF(0.0), KF(0.0));
+  kvec3 tsum = kv3(KF(0.0), KF(0.0), KF(0.0));
+  kvec3 psum = kv3(KF(0.0), KF(0.0), KF(0.0));
+  float lsum = KF(0.0), ssum = KF(0.0);
+  if (stratified != 0) {
+    float cells = KFLT(ncx) * KFLT(ncy);
+    n = k_mini(KNIT_MS_MAX_POINTS, n * k_maxi(1, KINT(k_ceil(cells / KF(16.0)))));
+  }
+  a.n = n;
+  a.hits = 0;
+  for (c = 0; c < KNIT_MS_COLORS; c++) a.color_w[c] = KF(0.0);
+  for (i = 0; i < n; i++) {
+    kvec3 q = knit_sobol2(i);
+    float ox = knit_frac(KX(q) + shift_x);
+    float oy = knit_frac(KY(q) + shift_y);
+    float px, py;
+    KnitCapm st;
+    if (stratified != 0) {
+      /* golden-ratio recurrences pick the cell; the net places the point in it */
+      int cx = KINT(k_floor(KFLT(ncx) * knit_frac(KF(0.61803398875) * KFLT(i) + shift_y)));
+      int cy = KINT(k_floor(KFLT(ncy) * knit_frac(KF(0.75487766625) * KFLT(i) + shift_x)));
+      px = (KFLT(bx0 + cx) + ox) * cw;
+      py = (KFLT(by0 + cy) + oy) * ch;
+    } else {
+      px = x + (ox - KF(0.5)) * KX(fx) + (oy - KF(0.5)) * KX(fy);
+      py = y + (ox - KF(0.5)) * KY(fx) + (oy - KF(0.5)) * KY(fy);
+    }
+    st = knit_capm_curved(g, codes, colors, px, py, wi_local, kx, ky, max_segment, max_steps);
+    ssum = ssum + KFLT(st.steps);
+    if (st.state == KNIT_CAPM_HIT) {
+      kvec3 nn = st.hit.n;
+      kvec3 tt = st.hit.tangent;
+      float nz = k_fmax(KZ(nn), KF(1.0) / k_sqrt(KF(1.0) + KNIT_MS_MAX_SLOPE * KNIT_MS_MAX_SLOPE));
+      float bx = k_clampf(KX(nn) / nz, -KNIT_MS_MAX_SLOPE, KNIT_MS_MAX_SLOPE);
+      float by = k_clampf(KY(nn) / nz, -KNIT_MS_MAX_SLOPE, KNIT_MS_MAX_SLOPE);
+      int ci = k_mini(k_maxi(st.hit.color, 0), KNIT_MS_COLORS - 1);
+      a.hits = a.hits + 1;
+      nsum = kv3_add(nsum, nn);
+      /* Tangents are lines, not arrows: align each with the running sum. */
+      tsum = kv3_dot(tsum, tt) < KF(0.0) ? kv3_sub(tsum, tt) : kv3_add(tsum, tt);
+      psum = kv3_add(psum, st.hit.p);
+      sx = sx + bx;
+      sy = sy + by;
+      sxx = sxx + bx * bx;
+      sxy = sxy + bx * by;
+      syy = syy + by * by;
+      lsum = lsum + KFLT(knit_vertical_query(g, codes, colors, KX(st.hit.p), KY(st.hit.p)).crossings);
+      a.color_w[ci] = a.color_w[ci] + KF(1.0);
+    }
+  }
+  a.p_delta = KFLT(n - a.hits) / KFLT(n);
+  a.steps = ssum / KFLT(n);
+  if (a.hits > 0) {
+    float inv = KF(1.0) / KFLT(a.hits);
+    float mx = sx * inv, my = sy * inv;
+    a.normal = kv3_normalize(nsum);
+    a.tangent = kv3_normalize(tsum);
+    a.position = kv3_scale(psum, inv);
+    a.sxx = k_fmax(sxx * inv - mx * mx, KF(0.0));
+    a.syy = k_fmax(syy * inv - my * my, KF(0.0));
+    a.sxy = sxy * inv - mx * my;
+    a.layers = lsum * inv;
+    for (c = 0; c < KNIT_MS_COLORS; c++) a.color_w[c] = a.color_w[c] * inv;
+  } else {
+    a.normal = kv3(KF(0.0), KF(0.0), KF(1.0));
+    a.tangent = kv3(KF(1.0), KF(0.0), KF(0.0));
+    a.position = kv3(x, y, KF(0.0));
+    a.sxx = KF(0.0);
+    a.syy = KF(0.0);
+    a.sxy = KF(0.0);
+    a.layers = KF(0.0);
+  }
+  return a;
+}
+
+#endif /* KNIT_KERNEL_MULTISCALE_H */
