@@ -55,17 +55,17 @@ KNIT_STRUCT_END(KnitAggregate)
  * v_k = v_{k-1} xor (v_{k-1} >> 1). KZ is unused. */
 KNIT_FN kvec3 knit_sobol2(int i) {
   int x = 0, y = 0;
-  int v = 8388608; /* 1 << 23 */
+  int vx = 8388608; /* 1 << 23 */
   int vy = 8388608;
   int b = i;
   int bit;
   for (bit = 0; bit < 24 && b != 0; bit++) {
     if ((b & 1) != 0) {
-      x = x ^ v;
+      x = x ^ vx;
       y = y ^ vy;
     }
     b = b >> 1;
-    v = v >> 1;
+    vx = vx >> 1;
     vy = vy ^ (vy >> 1);
   }
   return kv3(KFLT(x) / KF(16777216.0), KFLT(y) / KF(16777216.0), KF(0.0));

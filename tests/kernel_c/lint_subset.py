@@ -17,7 +17,7 @@ RULES = [
     (r"\b(class|template|typename|namespace|using|new|delete|operator|auto|constexpr|"
      r"nullptr|static_cast|reinterpret_cast|const_cast)\b", "C++-only construct"),
     (r"->", "no pointers"),
-    (r"\b(float|int|kvec3|K[A-Z]\w*)\s*\*\s*\w+\s*[,;=)\[]", "no pointer declarations"),
+    (r"(^|[(,;{])\s*(float|int|kvec3|K[A-Z]\w*)\s*\*\s*\w+\s*[,;=)\[]", "no pointer declarations"),
     (r"\(\s*(float|int|kvec3)\s*\*\s*\)", "no pointer casts"),
     (r"&\s*[A-Za-z_]\w*\s*[,)]", "no address-of / references"),
     (r"#\s*include\s*<", "no system includes in the kernel"),
