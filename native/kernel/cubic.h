@@ -16,7 +16,7 @@ KNIT_STRUCT(KRoots)
   float r0, r1, r2; /* in ascending order; unused ones are 0 */
 KNIT_STRUCT_END(KRoots)
 
-KNIT_FN KRoots kroots_none(void) {
+KNIT_FN KRoots kroots_none(KNIT_NOARGS) {
   KRoots r;
   r.n = 0;
   r.r0 = KF(0.0);

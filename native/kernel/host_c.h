@@ -8,6 +8,7 @@
  *   KNIT_FN               qualifier of every kernel function
  *   KNIT_STRUCT(Name)     opens a struct declaration, KNIT_STRUCT_END(Name) closes it
  *   KNIT_ARRAY(T, name)   a read-only array parameter of unknown length
+ *   KNIT_NOARGS           the parameter list of a function without parameters
  *   kvec3, kv3(x,y,z)     3-vector type and constructor; KX/KY/KZ component access
  *   KF(x)                 a float literal (C: single precision, no double promotion)
  *   KINT(x), KFLT(i)      conversions
@@ -27,6 +28,7 @@
 #define KNIT_STRUCT(Name) typedef struct Name {
 #define KNIT_STRUCT_END(Name) } Name;
 #define KNIT_ARRAY(T, name) const T *name
+#define KNIT_NOARGS void
 
 typedef struct kvec3 {
   float x, y, z;

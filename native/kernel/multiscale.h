@@ -7,7 +7,7 @@
  * over it; each is marched with CAPM along the same view direction and the
  * results are aggregated:
  *   p_delta   fraction of the footprint the ray passes through (misses),
- *   normal    mean normal of the yarn surface hit, in the base frame,
+ *   n         mean normal of the yarn surface hit, in the base frame,
  *   sigma     LEAN covariance (Olano and Baker 2010, paper Eq. 10) of the hit
  *             normals' slopes (n.x/n.z, n.y/n.z) around their mean, to be added
  *             to the specular lobe's own slope covariance (paper Eq. 11),
@@ -38,10 +38,10 @@
 #define KNIT_MS_MAX_SLOPE KF(4.0)
 
 KNIT_STRUCT(KnitAggregate)
-  int n;            /* footprint points marched */
+  int points;       /* footprint points marched */
   int hits;         /* of which hit a yarn */
   float p_delta;    /* (n - hits) / n */
-  kvec3 normal;     /* mean hit normal (unit), base frame */
+  kvec3 n;          /* mean hit normal (unit), base frame */
   kvec3 tangent;    /* mean yarn tangent (unit), base frame */
   float sxx, sxy, syy; /* LEAN slope covariance of the hit normals */
   float layers;     /* mean tube count under the hits */
@@ -102,7 +102,7 @@ KNIT_FN KnitAggregate knit_aggregate(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_AR
     float cells = KFLT(ncx) * KFLT(ncy);
     n = k_mini(KNIT_MS_MAX_POINTS, n * k_maxi(1, KINT(k_ceil(cells / KF(16.0)))));
   }
-  a.n = n;
+  a.points = n;
   a.hits = 0;
   for (c = 0; c < KNIT_MS_COLORS; c++) a.color_w[c] = KF(0.0);
   for (i = 0; i < n; i++) {
@@ -129,7 +129,7 @@ KNIT_FN KnitAggregate knit_aggregate(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_AR
       float nz = k_fmax(KZ(nn), KF(1.0) / k_sqrt(KF(1.0) + KNIT_MS_MAX_SLOPE * KNIT_MS_MAX_SLOPE));
       float bx = k_clampf(KX(nn) / nz, -KNIT_MS_MAX_SLOPE, KNIT_MS_MAX_SLOPE);
       float by = k_clampf(KY(nn) / nz, -KNIT_MS_MAX_SLOPE, KNIT_MS_MAX_SLOPE);
-      int ci = k_mini(k_maxi(st.hit.color, 0), KNIT_MS_COLORS - 1);
+      int ci = k_mini(k_maxi(st.hit.colour, 0), KNIT_MS_COLORS - 1);
       a.hits = a.hits + 1;
       nsum = kv3_add(nsum, nn);
       /* Tangents are lines, not arrows: align each with the running sum. */
@@ -140,7 +140,10 @@ KNIT_FN KnitAggregate knit_aggregate(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_AR
       sxx = sxx + bx * bx;
       sxy = sxy + bx * by;
       syy = syy + by * by;
-      lsum = lsum + KFLT(knit_vertical_query(g, codes, colors, KX(st.hit.p), KY(st.hit.p)).crossings);
+      {
+        KnitLineHit below = knit_vertical_query(g, codes, colors, KX(st.hit.p), KY(st.hit.p));
+        lsum = lsum + KFLT(below.crossings);
+      }
       a.color_w[ci] = a.color_w[ci] + KF(1.0);
     }
   }
@@ -149,7 +152,7 @@ KNIT_FN KnitAggregate knit_aggregate(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_AR
   if (a.hits > 0) {
     float inv = KF(1.0) / KFLT(a.hits);
     float mx = sx * inv, my = sy * inv;
-    a.normal = kv3_normalize(nsum);
+    a.n = kv3_normalize(nsum);
     a.tangent = kv3_normalize(tsum);
     a.position = kv3_scale(psum, inv);
     a.sxx = k_fmax(sxx * inv - mx * mx, KF(0.0));
@@ -158,7 +161,7 @@ KNIT_FN KnitAggregate knit_aggregate(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_AR
     a.layers = lsum * inv;
     for (c = 0; c < KNIT_MS_COLORS; c++) a.color_w[c] = a.color_w[c] * inv;
   } else {
-    a.normal = kv3(KF(0.0), KF(0.0), KF(1.0));
+    a.n = kv3(KF(0.0), KF(0.0), KF(1.0));
     a.tangent = kv3(KF(1.0), KF(0.0), KF(0.0));
     a.position = kv3(x, y, KF(0.0));
     a.sxx = KF(0.0);

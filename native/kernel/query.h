@@ -37,10 +37,10 @@ KNIT_STRUCT(KnitLineHit)
   kvec3 n;        /* outward tube normal at p */
   kvec3 tangent;  /* unit yarn tangent at Y(t) */
   int row, col;   /* cell owning the curve point (row from the bottom, unwrapped) */
-  int code, color;
+  int code, colour; /* stitch code and colour index of that cell */
 KNIT_STRUCT_END(KnitLineHit)
 
-KNIT_FN KnitLineHit knit_line_hit_none(void) {
+KNIT_FN KnitLineHit knit_line_hit_none(KNIT_NOARGS) {
   KnitLineHit h;
   h.hit = 0;
   h.crossings = 0;
@@ -53,7 +53,7 @@ KNIT_FN KnitLineHit knit_line_hit_none(void) {
   h.row = 0;
   h.col = 0;
   h.code = 0;
-  h.color = 0;
+  h.colour = 0;
   return h;
 }
 
@@ -209,7 +209,7 @@ KNIT_FN KnitLineHit knit_crossing(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY
   h.row = rw.k;
   h.col = c;
   h.code = codes[rw.off + k_modi(c, g.cols)];
-  h.color = colors[rw.off + k_modi(c, g.cols)];
+  h.colour = colors[rw.off + k_modi(c, g.cols)];
   return h;
 }
 

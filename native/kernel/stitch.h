@@ -240,8 +240,13 @@ KNIT_FN KCurve knit_row_curve_at(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, fl
     kvec3 w, dp, dd1, dd2;
     if (knit_same_profile(cl, ncl)) return self;
     other = knit_profile(g, ncl.code, ncl.sg, t - ntc, ntc, rw.yk);
-    lo = nc > c ? self : other; /* the cell left of the boundary */
-    hi = nc > c ? other : self;
+    if (nc > c) { /* lo: the cell left of the boundary */
+      lo = self;
+      hi = other;
+    } else {
+      lo = other;
+      hi = self;
+    }
     w = knit_blend_weight(t, tb);
     dp = kv3_sub(hi.p, lo.p);
     dd1 = kv3_sub(hi.d1, lo.d1);
@@ -401,10 +406,13 @@ KNIT_FN KQuad knit_piece_quad(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, int g
                                 knit_profile_node(g, cl.code, cl.sg, 2 * j + 1, tc, rw.yk),
                                 knit_profile_node(g, cl.code, cl.sg, 2 * j + 2, tc, rw.yk), t0);
   }
-  /* Blended piece: interpolate the exact (blended) curve. */
-  return knit_quad_from_nodes(knit_row_curve_at(g, codes, rw, t0).p,
-                              knit_row_curve_at(g, codes, rw, t0 + KF(0.5) * K_PI_4).p,
-                              knit_row_curve_at(g, codes, rw, t0 + K_PI_4).p, t0);
+  {
+    /* Blended piece: interpolate the exact (blended) curve. */
+    KCurve n0 = knit_row_curve_at(g, codes, rw, t0);
+    KCurve n1 = knit_row_curve_at(g, codes, rw, t0 + KF(0.5) * K_PI_4);
+    KCurve n2 = knit_row_curve_at(g, codes, rw, t0 + K_PI_4);
+    return knit_quad_from_nodes(n0.p, n1.p, n2.p, t0);
+  }
 }
 
 KNIT_FN kvec3 knit_quad_eval(KQuad q, float x) {

@@ -54,7 +54,7 @@ static TubeCrossing to_crossing(const k::KnitLineHit& h) {
   c.row = h.row;
   c.col = h.col;
   c.stitch = h.code;
-  c.color = h.color;
+  c.color = h.colour;
   c.layer = ((h.row % 2) + 2) % 2;
   c.t = h.t;
   return c;
@@ -86,7 +86,7 @@ SurfaceHit KnitSurface::query(float x, float y) const {
     s.row = h.row;
     s.col = h.col;
     s.stitch = h.code;
-    s.color = h.color;
+    s.color = h.colour;
   }
   return s;
 }
@@ -136,7 +136,7 @@ SurfaceHit KnitSurface::capm(float x, float y, Vec3 wi_local, const FrameProvide
     s.row = h.row;
     s.col = h.col;
     s.stitch = h.code;
-    s.color = h.color;
+    s.color = h.colour;
     s.layers = k::knit_vertical_query(geom_, codes(), colors(), h.p.x, h.p.y).crossings;
   }
   return s;

@@ -30,6 +30,10 @@ RULES = [
     (r"[0-9]\.[0-9]*f\b|[0-9]f\b", "write float literals as KF(x)"),
     (r"\b(float|int|kvec3|K[A-Z]\w*)\s+(u|v|P|N|I|Ng|Ci|Ps|time|dtime|dPdu|dPdv|dPdtime)\s*[,;=)\[]",
      "name reserved in OSL (a shader global)"),
+    (r"\)\s*\.\s*[A-Za-z_]", "OSL cannot take a member of a call's result: assign it to a local first"),
+    (r"\b(color|point|normal|vector|matrix|string|closure|output|shader|surface|volume|displacement|"
+     r"illuminance|illuminate|emit|public|private|int2|float2|float3)\b", "an OSL keyword or type name"),
+    (r"\)\s*\[", "OSL cannot index an expression: index a named variable"),
 ]
 
 FUNC = re.compile(r"KNIT_FN\s+\w+\s+(\w+)\s*\((.*?)\)\s*\{", re.S)

@@ -52,9 +52,9 @@ TEST(MultiScale, PointFootprintConvergesToNearField) {
     const k::KnitAggregate a = aggregate(s, x, y, 1e-5f, wi, 16);
     ++n;
     if (a.p_delta == (h.hit ? 0.f : 1.f)) ++pd_same;
-    if (h.hit && a.hits == a.n) {
+    if (h.hit && a.hits == a.points) {
       ++both_hit;
-      if (k::kv3_len(k::kv3_sub(a.normal, h.normal)) < 1e-3f) ++normal_same;
+      if (k::kv3_len(k::kv3_sub(a.n, h.normal)) < 1e-3f) ++normal_same;
       if (a.sxx + a.syy < 1e-4f) ++sigma_zero;  // float cancellation in E[b^2] - E[b]^2
     }
   }
@@ -84,8 +84,8 @@ TEST(MultiScale, OutputStabilisesAsFootprintGrows) {
         const k::KnitAggregate a = aggregate(s, 500 * U(rng), 500 * U(rng), size, wi, 16, 0.37f, 0.71f);
         sum += a.p_delta;
         sum2 += a.p_delta * a.p_delta;
-        nz += a.normal.z;
-        nz2 += a.normal.z * a.normal.z;
+        nz += a.n.z;
+        nz2 += a.n.z * a.n.z;
       }
       const double var = std::max(0.0, sum2 / m - (sum / m) * (sum / m));
       const double var_n = std::max(0.0, nz2 / m - (nz / m) * (nz / m));
@@ -127,7 +127,7 @@ TEST(MultiScale, MatchesExplicitTubesOverFootprint) {
         apd += a.p_delta / reps;
         asxx += a.sxx / reps;
         asyy += a.syy / reps;
-        points += a.n;
+        points += a.points;
       }
       // Reference: a dense grid of explicit-tube rays over the same square.
       int n = 0, through = 0;
@@ -196,7 +196,7 @@ TEST(MultiScale, DefaultPointCountIsAccurateEnough) {
       for (int i = 0; i < m; ++i) {
         const k::KnitAggregate a = aggregate(s, xs[size_t(i)], ys[size_t(i)], size, wi, npts, U(rng), U(rng));
         ep += (a.p_delta - truth[size_t(i)]) * (a.p_delta - truth[size_t(i)]);
-        used = a.n;
+        used = a.points;
       }
       const double rp = std::sqrt(ep / m);
       std::printf("[ ms ] footprint %.1f stitch(es), n_points %2d (%2d used): rms p_delta error %.4f\n", stitches,
