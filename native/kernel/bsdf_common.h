@@ -75,7 +75,7 @@ KNIT_FN float kb_side(kvec3 wo) { return KZ(wo) < KF(0.0) ? KF(-1.0) : KF(1.0); 
  * (Walter et al. 2007, Eq. 22); no total internal reflection from outside. */
 KNIT_FN float kb_fresnel_dielectric(float c_in, float eta) {
   float c = k_clampf(c_in, KF(0.0), KF(1.0));
-  float g = k_safe_sqrt(eta * eta - KF(1.0) + c * c);
+  float g = k_safe_sqrt((eta - KF(1.0)) * (eta + KF(1.0)) + c * c); /* no cancellation near eta = 1 */
   float a, b;
   if (g + c <= KF(0.0)) return KF(1.0); /* eta == 1 at exact grazing */
   a = (g - c) / (g + c);
