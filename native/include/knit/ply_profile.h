@@ -16,7 +16,7 @@ struct PlyParams {
   int ply_count = 3;         // plies per yarn, [1, 16]; 1 = no ply grooves
   float ply_radius = 0.4641016f;  // ply radius / yarn radius, (0, 1); packed_radius(3)
   float ply_twist = 0.5f;    // ply helix angle at the yarn surface, radians, |.| <= 1.4 (sign: Z > 0)
-  int fiber_count = 40;      // fibres per ply, [0, 10000]; < 7 gives no fibre profile
+  int fiber_count = 40;      // fibres per ply, [0, 10000]; < 4 gives no fibre profile
   float fiber_twist = -0.35f;  // fibre helix angle on the ply surface, radians, |.| <= 1.4
   float yarn_radius = 0.75f;   // yarn radius in pattern units, (0, 1e3]
 
