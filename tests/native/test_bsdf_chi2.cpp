@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,9 @@ struct Case {
   float B = 0.7f, r = 0.6f, D = 1.0f, shadow = 1.0f;
   int layers = 1;
 };
+
+// gtest prints test parameters in test names and listings: print the name.
+void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
 
 std::string angle_tag(double t) { return "th" + std::to_string(int(t)); }
 
