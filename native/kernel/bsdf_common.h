@@ -30,8 +30,6 @@
 /* Smallest GGX roughness the kernel uses; smaller values are clamped to it
  * (1e-3 keeps D(h) below 3.2e5, well inside float range). */
 #define KB_ALPHA_MIN KF(1.0e-3)
-/* |cos| below which a direction counts as lying in the tangent plane. */
-#define KB_COS_EPS KF(1.0e-9)
 /* Black, as an RGB value. */
 #define KB_BLACK kv3(KF(0.0), KF(0.0), KF(0.0))
 
