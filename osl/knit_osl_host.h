@@ -23,6 +23,7 @@ float knit_osl_z(vector w) { return w[2]; }
 #define KF(x) (x)
 #define KINT(x) ((int)(x))
 #define KFLT(i) ((float)(i))
+#define KNIT_UNUSED(x)
 
 #define k_sqrt(x) sqrt(x)
 #define k_sin(x) sin(x)

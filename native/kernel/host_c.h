@@ -12,6 +12,8 @@
  *   kvec3, kv3(x,y,z)     3-vector type and constructor; KX/KY/KZ component access
  *   KF(x)                 a float literal (C: single precision, no double promotion)
  *   KINT(x), KFLT(i)      conversions
+ *   KNIT_UNUSED(x);       marks a parameter a function does not read (C: a void
+ *                         cast; OSL: nothing, leaving an empty statement)
  *   k_sqrt ... k_cbrt     scalar maths on float
  */
 #ifndef KNIT_KERNEL_HOST_C_H
@@ -49,6 +51,7 @@ KNIT_FN kvec3 kv3(float x, float y, float z) {
 #define KF(x) ((float)(x))
 #define KINT(x) ((int)(x))
 #define KFLT(i) ((float)(i))
+#define KNIT_UNUSED(x) ((void)(x))
 
 #define k_sqrt(x) sqrtf(x)
 #define k_sin(x) sinf(x)

@@ -10,5 +10,13 @@
 #include "query.h"
 #include "capm.h"
 #include "multiscale.h"
+#include "bsdf_common.h"
+#include "bsdf_microfacet.h"
+#include "bsdf_lommel_seeliger.h"
+#include "bsdf_lambert_transmission.h"
+#include "bsdf_attenuation.h"
+#include "bsdf_delta.h"
+#include "yarn_bsdf.h"
+#include "ply_profile.h"
 
 #endif /* KNIT_KERNEL_H */

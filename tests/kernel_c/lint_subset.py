@@ -28,8 +28,6 @@ RULES = [
     (r"\bstatic\b", "no static (state or qualifiers); use KNIT_FN"),
     (r"\bconst\b", "no const qualifiers (OSL has none); use KNIT_ARRAY for array params"),
     (r"[0-9]\.[0-9]*f\b|[0-9]f\b", "write float literals as KF(x)"),
-    (r"\b(float|int|kvec3|K[A-Z]\w*)\s+(u|v|P|N|I|Ng|Ci|Ps|time|dtime|dPdu|dPdv|dPdtime)\s*[,;=)\[]",
-     "name reserved in OSL (a shader global)"),
     (r"\)\s*\.\s*[A-Za-z_]", "OSL cannot take a member of a call's result: assign it to a local first"),
     (r"\b(color|point|normal|vector|matrix|string|closure|output|shader|surface|volume|displacement|"
      r"illuminance|illuminate|emit|public|private|int2|float2|float3)\b", "an OSL keyword or type name"),

@@ -1,0 +1,194 @@
+"""Python bindings of the stitch geometry: StitchParams, KnitSurface (query,
+crossings, capm), frames and explicit_yarns. Accuracy is checked against a
+ray cast of the explicit yarns done here in numpy (independent of the C++
+kernel): the first surface of a union of spheres centred on the dense curve.
+"""
+import math
+import unittest
+
+import numpy as np
+
+import knitshade
+
+
+def seed_pattern():
+    return knitshade.Pattern.from_rows([[0, 1], [1, 0]])
+
+
+def explicit_top(curves, r, x, y):
+    """Height of the first tube surface seen from above at (x, y): the
+    maximum over curve points c within r of (x, y) of c.z + sqrt(r^2 - rho^2)."""
+    best = -np.inf
+    for c in curves:
+        d2 = (c[:, 0] - x) ** 2 + (c[:, 1] - y) ** 2
+        m = d2 < r * r
+        if m.any():
+            best = max(best, float(np.max(c[m, 2] + np.sqrt(r * r - d2[m]))))
+    return best
+
+
+class StitchParamsTest(unittest.TestCase):
+    def test_defaults_and_fields(self):
+        p = knitshade.StitchParams()
+        self.assertAlmostEqual(p.a, 1.5)
+        self.assertAlmostEqual(p.h, 4.0)
+        self.assertAlmostEqual(p.d, 1.0)
+        self.assertAlmostEqual(p.r, 0.65, places=6)
+        self.assertAlmostEqual(p.row_spacing, 4.5)
+        self.assertGreater(p.clearance(), 2 * p.r)
+
+    def test_invalid_values_name_the_parameter(self):
+        cases = [
+            (dict(a=-1.0), "a (loop roundness) must be > 0, got -1"),
+            (dict(h=0.0), "h (loop height) must be > 0, got 0"),
+            (dict(d=0.0), "d (loop depth) must be non-zero"),
+            (dict(r=-0.5), "r (yarn radius) must be > 0, got -0.5"),
+            (dict(a=float("nan")), "a must be finite, got nan"),
+            (dict(r=0.8), "pass through each other"),
+        ]
+        for kwargs, message in cases:
+            with self.subTest(kwargs=kwargs):
+                with self.assertRaises(ValueError) as cm:
+                    knitshade.StitchParams(**kwargs)
+                self.assertIn(message, str(cm.exception))
+
+
+class QueryTest(unittest.TestCase):
+    def setUp(self):
+        self.params = knitshade.StitchParams()
+        self.surf = knitshade.KnitSurface(seed_pattern(), self.params)
+
+    def test_vectorised_shapes_and_keys(self):
+        u = np.linspace(5, 30, 101)
+        v = np.linspace(3, 17, 101)
+        q = self.surf.query(u, v)
+        for key in ("hit", "z", "position", "normal", "tangent", "layers", "stitch", "color", "row", "col"):
+            self.assertIn(key, q)
+        self.assertEqual(q["hit"].shape, (101,))
+        self.assertEqual(q["normal"].shape, (101, 3))
+        hit = q["hit"]
+        self.assertTrue(hit.any() and (~hit).any())
+        self.assertTrue(np.all(np.isnan(q["z"][~hit])))
+        n = q["normal"][hit]
+        np.testing.assert_allclose(np.linalg.norm(n, axis=1), 1.0, atol=1e-4)
+        self.assertTrue(np.all(n[:, 2] > -1e-3), "the first surface seen from above faces up")
+        self.assertTrue(np.all(q["layers"][hit] >= 1))
+        self.assertTrue(set(np.unique(q["stitch"][hit])) <= {0, 1})
+
+    def test_height_matches_explicit_yarns(self):
+        y = knitshade.explicit_yarns(seed_pattern(), self.params, 4, 4, 512)
+        self.assertAlmostEqual(y["radius"], self.params.r, places=6)
+        rng = np.random.default_rng(4)
+        u = rng.uniform(8, 17, 300)
+        v = rng.uniform(8, 22, 300)
+        q = self.surf.query(u, v)
+        errs = []
+        agree = 0
+        for i in range(len(u)):
+            top = explicit_top(y["curves"], y["radius"], u[i], v[i])
+            if np.isfinite(top) == bool(q["hit"][i]):
+                agree += 1
+            if np.isfinite(top) and q["hit"][i]:
+                errs.append(abs(top - q["z"][i]))
+        self.assertGreaterEqual(agree, 0.98 * len(u))
+        self.assertLess(np.mean(errs) / self.params.r, 0.01)
+
+    def test_uv_scale_maps_uv_to_pattern_space(self):
+        s2 = knitshade.KnitSurface(seed_pattern(), self.params, uv_scale=10.0)
+        a = s2.query(np.array([1.3]), np.array([0.7]))
+        b = self.surf.query(np.array([13.0]), np.array([7.0]))
+        np.testing.assert_allclose(a["position"], b["position"], atol=1e-4)
+
+    def test_crossings_list_both_layers(self):
+        found_two = False
+        for x in np.linspace(0, 12.5, 60):
+            cr = self.surf.crossings(float(x), 6.75)
+            for c in cr:
+                self.assertGreaterEqual(c["z_top"], c["z_bottom"])
+                self.assertIn(c["layer"], (0, 1))
+            if len({c["layer"] for c in cr}) == 2:
+                found_two = True
+            tops = [c["z_top"] for c in cr]
+            self.assertEqual(tops, sorted(tops, reverse=True))
+        self.assertTrue(found_two, "some vertical line must cross tubes of both row layers")
+
+    def test_bad_input_is_rejected(self):
+        with self.assertRaises(ValueError) as cm:
+            self.surf.query(np.array([1.0, float("nan")]), np.array([1.0, 2.0]))
+        self.assertIn("u[1] must be finite", str(cm.exception))
+        with self.assertRaises(ValueError):
+            self.surf.query(np.zeros(3), np.zeros(4))
+        with self.assertRaises(ValueError):
+            knitshade.KnitSurface(seed_pattern(), self.params, uv_scale=0.0)
+
+
+class CapmTest(unittest.TestCase):
+    def setUp(self):
+        self.params = knitshade.StitchParams()
+        self.surf = knitshade.KnitSurface(seed_pattern(), self.params)
+
+    def test_normal_incidence_equals_height_query(self):
+        rng = np.random.default_rng(2)
+        u = rng.uniform(0, 40, 200)
+        v = rng.uniform(0, 40, 200)
+        c = self.surf.capm(u, v, np.array([0.0, 0.0, 1.0]))
+        q = self.surf.query(u, v)
+        np.testing.assert_array_equal(c["hit"], q["hit"])
+        np.testing.assert_allclose(c["position"][c["hit"]], q["position"][q["hit"]], atol=1e-3)
+        self.assertTrue(np.all(c["steps"] == 1))
+
+    def test_oblique_rays_land_on_the_explicit_tube_surface(self):
+        y = knitshade.explicit_yarns(seed_pattern(), self.params, 6, 6, 256)
+        pts = np.concatenate(y["curves"])
+        rng = np.random.default_rng(9)
+        th = np.radians(60)
+        n = 150
+        ph = rng.uniform(0, 2 * np.pi, n)
+        wi = np.stack([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.full(n, np.cos(th))], 1)
+        u = rng.uniform(20, 50, n)
+        v = rng.uniform(20, 50, n)
+        c = self.surf.capm(u, v, wi)
+        self.assertGreater(c["hit"].mean(), 0.7)
+        for p in c["position"][c["hit"]]:
+            d = np.min(np.linalg.norm(pts - p, axis=1))
+            self.assertAlmostEqual(d, self.params.r, delta=0.02 * self.params.r + 0.01)
+        self.assertLessEqual(int(c["steps"].max()), 32)
+
+    def test_cylinder_bends_rays_away_at_the_silhouette(self):
+        # Grazing rays across a tight cylinder leave the shell: fewer hits than flat.
+        rng = np.random.default_rng(1)
+        n = 300
+        wi = np.tile([math.sin(math.radians(88)), 0.0, math.cos(math.radians(88))], (n, 1))
+        u = rng.uniform(0, 40, n)
+        v = rng.uniform(0, 40, n)
+        flat = self.surf.capm(u, v, wi)
+        cyl = self.surf.capm(u, v, wi, frame=knitshade.CylinderFrame(15.0))
+        self.assertLess(cyl["hit"].sum(), flat["hit"].sum())
+
+    def test_rejects_directions_into_the_surface(self):
+        with self.assertRaises(ValueError) as cm:
+            self.surf.capm(np.array([1.0]), np.array([1.0]), np.array([0.0, 0.0, -1.0]))
+        self.assertIn("z > 0", str(cm.exception))
+        with self.assertRaises(ValueError):
+            knitshade.CylinderFrame(-1.0)
+
+
+class ExplicitYarnsTest(unittest.TestCase):
+    def test_shapes_and_extent(self):
+        p = knitshade.Pattern.from_rows([[0, 1, 0], [1, 1, 0]])
+        y = knitshade.explicit_yarns(p, knitshade.StitchParams(), 2, 3, 32)
+        self.assertEqual(len(y["curves"]), 2 * 3)
+        for c, col in zip(y["curves"], y["colors"]):
+            self.assertEqual(c.shape, (3 * 2 * 32 + 1, 3))
+            self.assertEqual(col.shape, (c.shape[0],))
+        self.assertAlmostEqual(y["width"], 2 * math.pi * 6, places=4)
+        self.assertAlmostEqual(y["height"], 4.5 * 6, places=4)
+        self.assertEqual(y["rows"], list(range(6)))
+
+    def test_rejects_bad_tiles(self):
+        with self.assertRaises(ValueError):
+            knitshade.explicit_yarns(seed_pattern(), knitshade.StitchParams(), 0, 1)
+
+
+if __name__ == "__main__":
+    unittest.main()
