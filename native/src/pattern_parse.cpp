@@ -13,9 +13,7 @@ namespace knit {
 
 namespace {
 
-// The canonical text of the largest pattern (4096 x 4096, colour indices of
-// three digits) is 32 MiB of stitches plus 64 MiB of colours: 128 MiB leaves room.
-constexpr size_t kMaxInputBytes = size_t(128) << 20;
+constexpr size_t kMaxInputBytes = Pattern::kMaxTextBytes;
 constexpr size_t kQuoteMax = 24;                      // code points quoted from a bad token
 
 bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
@@ -98,7 +96,7 @@ class Parser {
   Pattern run() {
     if (text_.size() > kMaxInputBytes) {
       throw PatternError(source_, 0, 0, "input is " + std::to_string(text_.size()) +
-                                            " bytes, more than the 128 MiB limit");
+                                            " bytes, more than the " + std::to_string(kMaxInputBytes >> 20) + " MiB limit");
     }
     size_t start = text_.substr(0, 3) == "\xEF\xBB\xBF" ? 3 : 0;  // UTF-8 byte order mark
     check_text(start);
@@ -308,7 +306,7 @@ Pattern Pattern::from_file(const std::string& path) {
     data.append(buf, n);
     if (data.size() > kMaxInputBytes) {
       std::fclose(f);
-      throw PatternError(path, 0, 0, "pattern file '" + path + "' is larger than the 128 MiB limit");
+      throw PatternError(path, 0, 0, "pattern file '" + path + "' is larger than the " + std::to_string(kMaxInputBytes >> 20) + " MiB limit");
     }
   }
   int err = std::ferror(f) ? errno : 0;
