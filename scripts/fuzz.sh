@@ -7,12 +7,15 @@
 # for SECONDS on a scratch copy of tests/fuzz/corpus/pattern, then merges the
 # inputs that add coverage back into that corpus (-merge=1). Crashes land in
 # tests/fuzz/crash-* (git-ignored). FUZZ_JOBS=N runs N fuzzer processes.
+# FUZZ_MAX_LEN (default 9000 bytes: enough for 4097 cells or 4097 rows, so
+# the limits are reachable) caps the input size.
 # FUZZ_MINIMISE=1 afterwards rewrites the corpus as its minimal subset.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds="${1:-600}"
 build="${2:-build-fuzz}"
 jobs="${FUZZ_JOBS:-1}"
+max_len="${FUZZ_MAX_LEN:-9000}"
 corpus=tests/fuzz/corpus/pattern
 
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
@@ -25,7 +28,7 @@ scratch="$build/fuzz-scratch"
 rm -rf "$scratch"
 mkdir -p "$scratch"
 echo "fuzzing for ${seconds}s with ${jobs} job(s); corpus $corpus ($(ls "$corpus" | wc -l) files)"
-run_args=(-max_total_time="$seconds" -dict=tests/fuzz/pattern.dict -max_len=4096 -timeout=10
+run_args=(-max_total_time="$seconds" -dict=tests/fuzz/pattern.dict -max_len="$max_len" -timeout=10
           -rss_limit_mb=4096 -artifact_prefix=tests/fuzz/ -print_final_stats=1)
 if [ "$jobs" -gt 1 ]; then
   run_args+=(-fork="$jobs")
