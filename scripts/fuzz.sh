@@ -9,7 +9,8 @@
 # tests/fuzz/crash-* (git-ignored). FUZZ_JOBS=N runs N fuzzer processes.
 # FUZZ_MAX_LEN (default 9000 bytes: enough for 4097 cells or 4097 rows, so
 # the limits are reachable) caps the input size.
-# FUZZ_MINIMISE=1 afterwards rewrites the corpus as its minimal subset.
+# FUZZ_MINIMISE=1 afterwards rewrites the corpus as its minimal subset plus
+# the hand-written seed-* files.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds="${1:-600}"
@@ -42,7 +43,7 @@ if [ "${FUZZ_MINIMISE:-0}" = 1 ]; then
   rm -rf "$minimal"
   mkdir -p "$minimal"
   "$fuzzer" -merge=1 "$minimal" "$corpus"
-  rm -f "$corpus"/*
-  cp "$minimal"/* "$corpus"/
+  find "$corpus" -type f ! -name 'seed-*' -delete   # hand-written seeds stay
+  cp -n "$minimal"/* "$corpus"/
 fi
 echo "corpus: $(ls "$corpus" | wc -l) files, $(du -sh "$corpus" | cut -f1)"
