@@ -93,9 +93,10 @@ namespace knit::py {
 
 void bind_pattern(pb::module_& m) {
   auto* exc = new pb::exception<PatternError>(m, "PatternError", PyExc_ValueError);
-  exc->doc() = "A pattern that does not parse or validate. str(e) is "
-               "'source:line:column: message'; attributes source, line, column "
-               "(1-based, 0 when not tied to a position) and message.";
+  exc->doc() =
+      "A pattern that does not parse or validate. str(e) is "
+      "'source:line:column: message'; attributes source, line, column "
+      "(1-based, 0 when not tied to a position) and message.";
   exc->attr("source") = pb::none();
   exc->attr("line") = 0;
   exc->attr("column") = 0;
@@ -115,8 +116,7 @@ void bind_pattern(pb::module_& m) {
           [](const std::string& text, const std::string& source) {
             return Pattern::parse(text, source);
           },
-          pb::arg("text"), pb::arg("source") = "<string>",
-          pb::call_guard<pb::gil_scoped_release>(),
+          pb::arg("text"), pb::arg("source") = "<string>", pb::call_guard<pb::gil_scoped_release>(),
           "Parses the pattern text format; errors name `source`, line and column.")
       .def_static(
           "from_rows",
@@ -146,13 +146,16 @@ void bind_pattern(pb::module_& m) {
       .def("color", &Pattern::color, pb::arg("row"), pb::arg("col"),
            "The colour index of a cell (0 without a colour matrix).")
       .def("to_text", &Pattern::to_text, "The canonical text form.")
-      .def("codes", [](const Pattern& p) { return to_array(p, p.codes()); },
-           "Stitch codes as an int32 array of shape (rows, cols).")
-      .def("colors", [](const Pattern& p) { return to_array(p, p.colors_or_zero()); },
-           "Colour indices as an int32 array of shape (rows, cols); zeros without colors.")
+      .def(
+          "codes", [](const Pattern& p) { return to_array(p, p.codes()); },
+          "Stitch codes as an int32 array of shape (rows, cols).")
+      .def(
+          "colors", [](const Pattern& p) { return to_array(p, p.colors_or_zero()); },
+          "Colour indices as an int32 array of shape (rows, cols); zeros without colors.")
       .def("__eq__",
            [](const Pattern& a, pb::handle b) -> pb::object {
-             if (!pb::isinstance<Pattern>(b)) return pb::reinterpret_borrow<pb::object>(Py_NotImplemented);
+             if (!pb::isinstance<Pattern>(b))
+               return pb::reinterpret_borrow<pb::object>(Py_NotImplemented);
              return pb::bool_(a == b.cast<const Pattern&>());
            })
       .def("__repr__", &repr)

@@ -11,9 +11,7 @@ namespace knit {
 
 namespace {
 
-std::string shape(int rows, int cols) {
-  return std::to_string(rows) + "x" + std::to_string(cols);
-}
+std::string shape(int rows, int cols) { return std::to_string(rows) + "x" + std::to_string(cols); }
 
 // Checks rows/cols against the limits and that `n` values fill the matrix.
 void check_shape(const std::string& source, int rows, int cols, size_t n, const char* what) {
@@ -21,26 +19,26 @@ void check_shape(const std::string& source, int rows, int cols, size_t n, const 
     throw PatternError(source, 0, 0, "empty pattern (" + shape(rows, cols) + ")");
   }
   if (rows > Pattern::kMaxRows) {
-    throw PatternError(source, 0, 0, "pattern has " + std::to_string(rows) + " rows, more than " +
-                                         std::to_string(Pattern::kMaxRows) + " (the limit)");
+    throw PatternError(source, 0, 0,
+                       "pattern has " + std::to_string(rows) + " rows, more than " +
+                           std::to_string(Pattern::kMaxRows) + " (the limit)");
   }
   if (cols > Pattern::kMaxCols) {
-    throw PatternError(source, 0, 0, "pattern has " + std::to_string(cols) +
-                                         " columns, more than " +
-                                         std::to_string(Pattern::kMaxCols) + " (the limit)");
+    throw PatternError(source, 0, 0,
+                       "pattern has " + std::to_string(cols) + " columns, more than " +
+                           std::to_string(Pattern::kMaxCols) + " (the limit)");
   }
   size_t cells = static_cast<size_t>(rows) * static_cast<size_t>(cols);
   if (n != cells) {
-    throw PatternError(source, 0, 0, std::string(what) + " has " + std::to_string(n) +
-                                         " entries, expected " + std::to_string(cells) +
-                                         " for a " + shape(rows, cols) + " pattern");
+    throw PatternError(source, 0, 0,
+                       std::string(what) + " has " + std::to_string(n) + " entries, expected " +
+                           std::to_string(cells) + " for a " + shape(rows, cols) + " pattern");
   }
 }
 
 // Checks every value of a row-major matrix; errors name row and column
 // (1-based, as line and column).
-void check_values(const std::string& source, int cols, const std::vector<int32_t>& v,
-                  bool colour) {
+void check_values(const std::string& source, int cols, const std::vector<int32_t>& v, bool colour) {
   for (size_t i = 0; i < v.size(); ++i) {
     int32_t x = v[i];
     bool ok = colour ? (x >= 0 && x < Pattern::kMaxColors) : (x >= 0 && x <= 3);
@@ -65,8 +63,8 @@ void append_row(const std::string& source, const std::vector<int>& src, size_t r
     int column = static_cast<int>(std::min(src.size(), cols)) + 1;
     throw PatternError(source, static_cast<int>(r) + 1, column,
                        std::string(what) + " row " + std::to_string(r + 1) + " has " +
-                           std::to_string(src.size()) + " cells, expected " +
-                           std::to_string(cols) + " like row 1");
+                           std::to_string(src.size()) + " cells, expected " + std::to_string(cols) +
+                           " like row 1");
   }
   for (int x : src) out.push_back(static_cast<int32_t>(x));
 }
@@ -74,8 +72,8 @@ void append_row(const std::string& source, const std::vector<int>& src, size_t r
 }  // namespace
 
 PatternError::PatternError(std::string source, int line, int column, const std::string& message)
-    : std::runtime_error(source + ":" + std::to_string(line) + ":" + std::to_string(column) +
-                         ": " + message),
+    : std::runtime_error(source + ":" + std::to_string(line) + ":" + std::to_string(column) + ": " +
+                         message),
       source_(std::move(source)),
       line_(line),
       column_(column),
@@ -113,14 +111,14 @@ Pattern Pattern::from_rows(const std::vector<std::vector<int>>& codes,
   const size_t cols = codes[0].size();
   std::vector<int32_t> flat_codes, flat_colors;
   flat_codes.reserve(codes.size() * cols);
-  for (size_t r = 0; r < codes.size(); ++r) append_row(source, codes[r], r, cols, "stitch", flat_codes);
+  for (size_t r = 0; r < codes.size(); ++r)
+    append_row(source, codes[r], r, cols, "stitch", flat_codes);
   if (!colors.empty()) {
     if (colors.size() != codes.size()) {
       int line = static_cast<int>(std::min(colors.size(), codes.size())) + 1;
       throw PatternError(source, line, 1,
-                         "colour matrix has " + std::to_string(colors.size()) +
-                             " rows, expected " + std::to_string(codes.size()) +
-                             " like the pattern");
+                         "colour matrix has " + std::to_string(colors.size()) + " rows, expected " +
+                             std::to_string(codes.size()) + " like the pattern");
     }
     flat_colors.reserve(flat_codes.size());
     for (size_t r = 0; r < colors.size(); ++r) {
@@ -135,9 +133,8 @@ Pattern Pattern::from_rows(const std::vector<std::vector<int>>& codes,
 
 Stitch Pattern::stitch(int row, int col) const {
   if (row < 0 || row >= rows_ || col < 0 || col >= cols_) {
-    throw std::out_of_range("Pattern: cell (" + std::to_string(row) + ", " +
-                            std::to_string(col) + ") outside the " + shape(rows_, cols_) +
-                            " pattern");
+    throw std::out_of_range("Pattern: cell (" + std::to_string(row) + ", " + std::to_string(col) +
+                            ") outside the " + shape(rows_, cols_) + " pattern");
   }
   return static_cast<Stitch>(codes_[static_cast<size_t>(row) * cols_ + col]);
 }

@@ -14,7 +14,7 @@ namespace knit {
 namespace {
 
 constexpr size_t kMaxInputBytes = Pattern::kMaxTextBytes;
-constexpr size_t kQuoteMax = 24;                      // code points quoted from a bad token
+constexpr size_t kQuoteMax = 24;  // code points quoted from a bad token
 
 bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 bool is_sep(char c) { return is_space(c) || c == ','; }
@@ -38,8 +38,11 @@ bool istarts_with(std::string_view s, std::string_view prefix) {
 size_t utf8_len(std::string_view s, size_t i) {
   auto at = [&](size_t k) { return static_cast<unsigned char>(s[k]); };
   unsigned char c = at(i);
-  size_t n = c < 0x80 ? 1 : (c >= 0xC2 && c <= 0xDF) ? 2 : (c >= 0xE0 && c <= 0xEF) ? 3
-                              : (c >= 0xF0 && c <= 0xF4) ? 4 : 0;
+  size_t n = c < 0x80                   ? 1
+             : (c >= 0xC2 && c <= 0xDF) ? 2
+             : (c >= 0xE0 && c <= 0xEF) ? 3
+             : (c >= 0xF0 && c <= 0xF4) ? 4
+                                        : 0;
   if (n == 0 || i + n > s.size()) return 0;
   for (size_t k = 1; k < n; ++k)
     if (!is_cont(at(i + k))) return 0;
@@ -76,11 +79,20 @@ std::string quote(std::string_view tok) {
 
 int stitch_code(char c) {
   switch (lower(c)) {
-    case '0': case 'k': return 0;
-    case '1': case 'p': return 1;
-    case '2': case 'f': return 2;
-    case '3': case 'b': return 3;
-    default: return -1;
+    case '0':
+    case 'k':
+      return 0;
+    case '1':
+    case 'p':
+      return 1;
+    case '2':
+    case 'f':
+      return 2;
+    case '3':
+    case 'b':
+      return 3;
+    default:
+      return -1;
   }
 }
 
@@ -95,8 +107,9 @@ class Parser {
 
   Pattern run() {
     if (text_.size() > kMaxInputBytes) {
-      throw PatternError(source_, 0, 0, "input is " + std::to_string(text_.size()) +
-                                            " bytes, more than the " + std::to_string(kMaxInputBytes >> 20) + " MiB limit");
+      throw PatternError(source_, 0, 0,
+                         "input is " + std::to_string(text_.size()) + " bytes, more than the " +
+                             std::to_string(kMaxInputBytes >> 20) + " MiB limit");
     }
     size_t start = text_.substr(0, 3) == "\xEF\xBB\xBF" ? 3 : 0;  // UTF-8 byte order mark
     check_text(start);
@@ -171,8 +184,9 @@ class Parser {
   }
 
   void start_colors(size_t off) {
-    if (in_colors_) fail(off, "second colour section (the first is at line " +
-                                  std::to_string(colors_line_) + ")");
+    if (in_colors_)
+      fail(off,
+           "second colour section (the first is at line " + std::to_string(colors_line_) + ")");
     if (rows_ == 0) fail(off, "colour section without a pattern (no stitch rows before it)");
     in_colors_ = true;
     colors_line_ = line_no_;
@@ -199,8 +213,8 @@ class Parser {
         i += utf8_len(body, i);  // text already checked: never 0
       }
       if (cells_.size() == static_cast<size_t>(Pattern::kMaxCols)) {
-        fail(base + start, "row has more than " + std::to_string(Pattern::kMaxCols) +
-                               " cells (the limit)");
+        fail(base + start,
+             "row has more than " + std::to_string(Pattern::kMaxCols) + " cells (the limit)");
       }
       size_t end = start;
       while (end < i && !is_sep(body[end])) ++end;
@@ -219,8 +233,7 @@ class Parser {
 
   void pattern_row() {
     if (rows_ == Pattern::kMaxRows) {
-      fail(cells_[0].off, "more than " + std::to_string(Pattern::kMaxRows) +
-                              " rows (the limit)");
+      fail(cells_[0].off, "more than " + std::to_string(Pattern::kMaxRows) + " rows (the limit)");
     }
     if (rows_ == 0) {
       cols_ = static_cast<int>(cells_.size());
@@ -230,8 +243,7 @@ class Parser {
     for (const Cell& cell : cells_) {
       int code = cell.text.size() == 1 ? stitch_code(cell.text[0]) : -1;
       if (code < 0) {
-        fail(cell.off, "unknown stitch code " + quote(cell.text) +
-                           " (expected 0-3 or K, P, F, B)");
+        fail(cell.off, "unknown stitch code " + quote(cell.text) + " (expected 0-3 or K, P, F, B)");
       }
       codes_.push_back(code);
     }
@@ -240,8 +252,8 @@ class Parser {
 
   void colour_row() {
     if (color_rows_ == rows_) {
-      fail(cells_[0].off, "colour matrix has more rows than the pattern (" +
-                              std::to_string(rows_) + ")");
+      fail(cells_[0].off,
+           "colour matrix has more rows than the pattern (" + std::to_string(rows_) + ")");
     }
     check_count("colour row", "like the pattern");
     for (const Cell& cell : cells_) colors_.push_back(colour_index(cell));
@@ -270,8 +282,8 @@ class Parser {
     if (rows_ == 0) throw PatternError(source_, 0, 0, "empty pattern (no stitch rows)");
     if (in_colors_ && color_rows_ != rows_) {
       throw PatternError(source_, colors_line_, 1,
-                         "colour matrix has " + std::to_string(color_rows_) +
-                             " rows, expected " + std::to_string(rows_) + " like the pattern");
+                         "colour matrix has " + std::to_string(color_rows_) + " rows, expected " +
+                             std::to_string(rows_) + " like the pattern");
     }
     return Pattern(rows_, cols_, std::move(codes_), std::move(colors_));
   }
@@ -297,7 +309,8 @@ Pattern Pattern::from_file(const std::string& path) {
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) {
     int err = errno;
-    throw PatternError(path, 0, 0, "cannot open pattern file '" + path + "': " + std::strerror(err));
+    throw PatternError(path, 0, 0,
+                       "cannot open pattern file '" + path + "': " + std::strerror(err));
   }
   std::string data;
   char buf[1 << 16];
@@ -306,13 +319,16 @@ Pattern Pattern::from_file(const std::string& path) {
     data.append(buf, n);
     if (data.size() > kMaxInputBytes) {
       std::fclose(f);
-      throw PatternError(path, 0, 0, "pattern file '" + path + "' is larger than the " + std::to_string(kMaxInputBytes >> 20) + " MiB limit");
+      throw PatternError(path, 0, 0,
+                         "pattern file '" + path + "' is larger than the " +
+                             std::to_string(kMaxInputBytes >> 20) + " MiB limit");
     }
   }
   int err = std::ferror(f) ? errno : 0;
   std::fclose(f);
   if (err != 0) {
-    throw PatternError(path, 0, 0, "cannot read pattern file '" + path + "': " + std::strerror(err));
+    throw PatternError(path, 0, 0,
+                       "cannot read pattern file '" + path + "': " + std::strerror(err));
   }
   return parse(data, path);
 }

@@ -20,8 +20,8 @@ int main(int argc, char** argv) {
   for (const auto& entry : std::filesystem::directory_iterator(argv[1], ec))
     if (entry.is_regular_file()) files.push_back(entry.path());
   if (ec || files.empty()) {
-    std::fprintf(stderr, "%s: no corpus files in '%s'%s%s\n", argv[0], argv[1],
-                 ec ? ": " : "", ec ? ec.message().c_str() : "");
+    std::fprintf(stderr, "%s: no corpus files in '%s'%s%s\n", argv[0], argv[1], ec ? ": " : "",
+                 ec ? ec.message().c_str() : "");
     return 1;
   }
   for (const auto& path : files) {

@@ -25,8 +25,8 @@ inline testing::AssertionResult ThrowsPatternError(const std::function<void()>& 
         e.message() == message) {
       return testing::AssertionSuccess();
     }
-    return testing::AssertionFailure() << "got      \"" << e.what() << "\"\nexpected \"" << want
-                                       << "\"";
+    return testing::AssertionFailure()
+           << "got      \"" << e.what() << "\"\nexpected \"" << want << "\"";
   } catch (const std::exception& e) {
     return testing::AssertionFailure() << "threw another exception: " << e.what();
   }

@@ -163,7 +163,7 @@ TEST(PatternValue, CellAccessIsBoundsChecked) {
 TEST(PatternValue, EqualityComparesShapeCodesAndColours) {
   Pattern a = Pattern::from_rows({{0, 1}});
   EXPECT_EQ(a, Pattern::from_rows({{0, 1}}));
-  EXPECT_NE(a, Pattern::from_rows({{0}, {1}}));        // same codes, other shape
+  EXPECT_NE(a, Pattern::from_rows({{0}, {1}}));  // same codes, other shape
   EXPECT_NE(a, Pattern::from_rows({{1, 0}}));
   EXPECT_NE(a, Pattern::from_rows({{0, 1}}, {{0, 0}}));  // an explicit colour matrix counts
   EXPECT_NE(Pattern::from_rows({{0, 1}}, {{0, 1}}), Pattern::from_rows({{0, 1}}, {{0, 2}}));
@@ -187,8 +187,8 @@ TEST(PatternText, CanonicalForm) {
 
 TEST(PatternText, RoundTripOfEverySyntax) {
   const char* inputs[] = {
-      "K",           "0 1\n2 3",         "KKPP\nPPKK",        "k,p,f,b",
-      "K\nP\nF\nB",  "KP\ncolors:\n0 1", "K\ncolors:\n200",   "FB\nBF\ncolours:\n3,4\n5 6",
+      "K",          "0 1\n2 3",         "KKPP\nPPKK",      "k,p,f,b",
+      "K\nP\nF\nB", "KP\ncolors:\n0 1", "K\ncolors:\n200", "FB\nBF\ncolours:\n3,4\n5 6",
   };
   for (const char* in : inputs) {
     Pattern p = Pattern::parse(in);

@@ -20,10 +20,12 @@ namespace {
 const char* kUnknown = " (expected 0-3 or K, P, F, B)";
 
 TEST(PatternErrors, RaggedRows) {
-  EXPECT_TRUE(ParseFails("K P\nK P K\n", 2, 5, "row has 3 cells, expected 2 like the first row (line 1)"));
+  EXPECT_TRUE(
+      ParseFails("K P\nK P K\n", 2, 5, "row has 3 cells, expected 2 like the first row (line 1)"));
   EXPECT_TRUE(ParseFails("# c\n\nKPK\nKPK\nKP\n", 5, 3,
                          "row has 2 cells, expected 3 like the first row (line 3)"));
-  EXPECT_TRUE(ParseFails("K,P\nKPP\n", 2, 3, "row has 3 cells, expected 2 like the first row (line 1)"));
+  EXPECT_TRUE(
+      ParseFails("K,P\nKPP\n", 2, 3, "row has 3 cells, expected 2 like the first row (line 1)"));
 }
 
 TEST(PatternErrors, UnknownCodeSeparated) {
@@ -31,7 +33,8 @@ TEST(PatternErrors, UnknownCodeSeparated) {
   EXPECT_TRUE(ParseFails("0 4", 1, 3, std::string("unknown stitch code '4'") + kUnknown));
   EXPECT_TRUE(ParseFails("K PP K", 1, 3, std::string("unknown stitch code 'PP'") + kUnknown));
   EXPECT_TRUE(ParseFails("K, é", 1, 4, std::string("unknown stitch code 'é'") + kUnknown));
-  EXPECT_TRUE(ParseFails("colors : x", 1, 1, std::string("unknown stitch code 'colors'") + kUnknown));
+  EXPECT_TRUE(
+      ParseFails("colors : x", 1, 1, std::string("unknown stitch code 'colors'") + kUnknown));
 }
 
 TEST(PatternErrors, UnknownCodeCompact) {
@@ -101,10 +104,12 @@ TEST(PatternErrors, ColourSectionPlacement) {
                          "colour section without a pattern (no stitch rows before it)"));
   EXPECT_TRUE(ParseFails("K\ncolors:\n0\nColours:\n0\n", 4, 1,
                          "second colour section (the first is at line 2)"));
-  EXPECT_TRUE(ParseFails("K\ncolors: 0\n", 2, 8,
-                         "unexpected text after 'colors:' (the colour matrix starts on the next line)"));
-  EXPECT_TRUE(ParseFails("K\nCOLOURS:0\n", 2, 9,
-                         "unexpected text after 'COLOURS:' (the colour matrix starts on the next line)"));
+  EXPECT_TRUE(
+      ParseFails("K\ncolors: 0\n", 2, 8,
+                 "unexpected text after 'colors:' (the colour matrix starts on the next line)"));
+  EXPECT_TRUE(
+      ParseFails("K\nCOLOURS:0\n", 2, 9,
+                 "unexpected text after 'COLOURS:' (the colour matrix starts on the next line)"));
 }
 
 TEST(PatternErrors, NotText) {
@@ -112,9 +117,12 @@ TEST(PatternErrors, NotText) {
   EXPECT_TRUE(ParseFails("KP\n# \xFF", 2, 3, "input is not text (invalid UTF-8 byte 0xFF)"));
   EXPECT_TRUE(ParseFails("K\x01", 1, 2, "input is not text (control byte 0x01)"));
   EXPECT_TRUE(ParseFails("K\x7F", 1, 2, "input is not text (control byte 0x7F)"));
-  EXPECT_TRUE(ParseFails("KP\xC3", 1, 3, "input is not text (invalid UTF-8 byte 0xC3)"));  // truncated
-  EXPECT_TRUE(ParseFails("\xC0\xAF", 1, 1, "input is not text (invalid UTF-8 byte 0xC0)"));  // overlong
-  EXPECT_TRUE(ParseFails("\xED\xA0\x80", 1, 1, "input is not text (invalid UTF-8 byte 0xED)"));  // surrogate
+  EXPECT_TRUE(
+      ParseFails("KP\xC3", 1, 3, "input is not text (invalid UTF-8 byte 0xC3)"));  // truncated
+  EXPECT_TRUE(
+      ParseFails("\xC0\xAF", 1, 1, "input is not text (invalid UTF-8 byte 0xC0)"));  // overlong
+  EXPECT_TRUE(ParseFails("\xED\xA0\x80", 1, 1,
+                         "input is not text (invalid UTF-8 byte 0xED)"));  // surrogate
   EXPECT_TRUE(ParseFails("\xF4\x90\x80\x80", 1, 1, "input is not text (invalid UTF-8 byte 0xF4)"));
   // Not-text is found before syntax errors on earlier lines.
   EXPECT_TRUE(ParseFails("X\n\n\x02", 3, 1, "input is not text (control byte 0x02)"));
@@ -122,7 +130,8 @@ TEST(PatternErrors, NotText) {
 
 TEST(PatternErrors, ColumnsCountCodePointsAndSkipTheByteOrderMark) {
   EXPECT_TRUE(ParseFails("K # é ✓\x01", 1, 8, "input is not text (control byte 0x01)"));
-  EXPECT_TRUE(ParseFails("\xEF\xBB\xBFK X", 1, 3, std::string("unknown stitch code 'X'") + kUnknown));
+  EXPECT_TRUE(
+      ParseFails("\xEF\xBB\xBFK X", 1, 3, std::string("unknown stitch code 'X'") + kUnknown));
 }
 
 TEST(PatternErrors, ErrorNamesTheSource) {
@@ -143,13 +152,15 @@ TEST(PatternLimits, RowLimit) {
 
 TEST(PatternLimits, ColumnLimit) {
   EXPECT_EQ(Pattern::parse(std::string(4096, 'K')).cols(), 4096);
-  EXPECT_TRUE(ParseFails(std::string(4097, 'K'), 1, 4097, "row has more than 4096 cells (the limit)"));
+  EXPECT_TRUE(
+      ParseFails(std::string(4097, 'K'), 1, 4097, "row has more than 4096 cells (the limit)"));
   std::string sep;
   for (int i = 0; i < 4097; ++i) sep += "P ";
   EXPECT_TRUE(ParseFails(sep, 1, 8193, "row has more than 4096 cells (the limit)"));
   EXPECT_EQ(Pattern::parse(sep.substr(0, 2 * 4096)).cols(), 4096);
   // A long line is rejected at cell 4097, however long it goes on.
-  EXPECT_TRUE(ParseFails(std::string(1 << 20, 'F'), 1, 4097, "row has more than 4096 cells (the limit)"));
+  EXPECT_TRUE(
+      ParseFails(std::string(1 << 20, 'F'), 1, 4097, "row has more than 4096 cells (the limit)"));
   EXPECT_TRUE(ParseFails(std::string(4096, 'K') + "\ncolors:\n" + std::string(4097, '1'), 3, 4097,
                          "row has more than 4096 cells (the limit)"));
 }
@@ -184,8 +195,9 @@ TEST(PatternFile, ErrorsNameThePath) {
 
 TEST(PatternFile, MissingFile) {
   std::string p = (temp_dir() / "does-not-exist.knit").string();
-  EXPECT_TRUE(ThrowsPatternError([&] { Pattern::from_file(p); }, p, 0, 0,
-                                 "cannot open pattern file '" + p + "': No such file or directory"));
+  EXPECT_TRUE(
+      ThrowsPatternError([&] { Pattern::from_file(p); }, p, 0, 0,
+                         "cannot open pattern file '" + p + "': No such file or directory"));
 }
 
 TEST(PatternFile, DirectoryIsNotAPatternFile) {
@@ -208,26 +220,54 @@ TEST(PatternFromRows, Errors) {
   const std::string s = "<rows>";
   EXPECT_TRUE(ThrowsPatternError([] { Pattern::from_rows({}); }, s, 0, 0,
                                  "empty pattern (no rows or an empty first row)"));
-  EXPECT_TRUE(ThrowsPatternError([] { Pattern::from_rows({{}, {0}}); }, s, 0, 0,
-                                 "empty pattern (no rows or an empty first row)"));
-  EXPECT_TRUE(ThrowsPatternError([] { Pattern::from_rows({{0, 1}, {0}}); }, s, 2, 2,
-                                 "stitch row 2 has 1 cells, expected 2 like row 1"));
-  EXPECT_TRUE(ThrowsPatternError([] { Pattern::from_rows({{0, 1}, {0, 1, 1}}); }, s, 2, 3,
-                                 "stitch row 2 has 3 cells, expected 2 like row 1"));
-  EXPECT_TRUE(ThrowsPatternError([] { Pattern::from_rows({{0, 1}, {1, 4}}); }, s, 2, 2,
-                                 "unknown stitch code 4 (expected 0-3: 0 knit, 1 purl, 2 front, 3 back)"));
-  EXPECT_TRUE(ThrowsPatternError([] { Pattern::from_rows({{-1}}); }, s, 1, 1,
-                                 "unknown stitch code -1 (expected 0-3: 0 knit, 1 purl, 2 front, 3 back)"));
-  EXPECT_TRUE(ThrowsPatternError([] { Pattern::from_rows({{0}, {1}}, {{0}}); }, s, 2, 1,
-                                 "colour matrix has 1 rows, expected 2 like the pattern"));
-  EXPECT_TRUE(ThrowsPatternError([] { Pattern::from_rows({{0}}, {{0}, {1}}); }, s, 2, 1,
-                                 "colour matrix has 2 rows, expected 1 like the pattern"));
-  EXPECT_TRUE(ThrowsPatternError([] { Pattern::from_rows({{0, 1}}, {{0}}); }, s, 1, 2,
-                                 "colour row 1 has 1 cells, expected 2 like row 1"));
-  EXPECT_TRUE(ThrowsPatternError([] { Pattern::from_rows({{0, 1}}, {{0, 256}}); }, s, 1, 2,
-                                 "colour index 256 out of range 0..255"));
-  EXPECT_TRUE(ThrowsPatternError([] { Pattern::from_rows({{0, 1}}, {{-3, 0}}); }, s, 1, 1,
-                                 "colour index -3 out of range 0..255"));
+  EXPECT_TRUE(ThrowsPatternError(
+      [] {
+        Pattern::from_rows({{}, {0}});
+      },
+      s, 0, 0, "empty pattern (no rows or an empty first row)"));
+  EXPECT_TRUE(ThrowsPatternError(
+      [] {
+        Pattern::from_rows({{0, 1}, {0}});
+      },
+      s, 2, 2, "stitch row 2 has 1 cells, expected 2 like row 1"));
+  EXPECT_TRUE(ThrowsPatternError(
+      [] {
+        Pattern::from_rows({{0, 1}, {0, 1, 1}});
+      },
+      s, 2, 3, "stitch row 2 has 3 cells, expected 2 like row 1"));
+  EXPECT_TRUE(ThrowsPatternError(
+      [] {
+        Pattern::from_rows({{0, 1}, {1, 4}});
+      },
+      s, 2, 2, "unknown stitch code 4 (expected 0-3: 0 knit, 1 purl, 2 front, 3 back)"));
+  EXPECT_TRUE(
+      ThrowsPatternError([] { Pattern::from_rows({{-1}}); }, s, 1, 1,
+                         "unknown stitch code -1 (expected 0-3: 0 knit, 1 purl, 2 front, 3 back)"));
+  EXPECT_TRUE(ThrowsPatternError(
+      [] {
+        Pattern::from_rows({{0}, {1}}, {{0}});
+      },
+      s, 2, 1, "colour matrix has 1 rows, expected 2 like the pattern"));
+  EXPECT_TRUE(ThrowsPatternError(
+      [] {
+        Pattern::from_rows({{0}}, {{0}, {1}});
+      },
+      s, 2, 1, "colour matrix has 2 rows, expected 1 like the pattern"));
+  EXPECT_TRUE(ThrowsPatternError(
+      [] {
+        Pattern::from_rows({{0, 1}}, {{0}});
+      },
+      s, 1, 2, "colour row 1 has 1 cells, expected 2 like row 1"));
+  EXPECT_TRUE(ThrowsPatternError(
+      [] {
+        Pattern::from_rows({{0, 1}}, {{0, 256}});
+      },
+      s, 1, 2, "colour index 256 out of range 0..255"));
+  EXPECT_TRUE(ThrowsPatternError(
+      [] {
+        Pattern::from_rows({{0, 1}}, {{-3, 0}});
+      },
+      s, 1, 1, "colour index -3 out of range 0..255"));
 }
 
 TEST(PatternFromRows, Limits) {
@@ -252,14 +292,26 @@ TEST(PatternConstructor, Errors) {
                                  "pattern has 4097 rows, more than 4096 (the limit)"));
   EXPECT_TRUE(ThrowsPatternError([] { Pattern(1, 4097, std::vector<int32_t>(4097, 0)); }, s, 0, 0,
                                  "pattern has 4097 columns, more than 4096 (the limit)"));
-  EXPECT_TRUE(ThrowsPatternError([] { Pattern(2, 2, {0, 1, 2}); }, s, 0, 0,
-                                 "code array has 3 entries, expected 4 for a 2x2 pattern"));
-  EXPECT_TRUE(ThrowsPatternError([] { Pattern(1, 2, {0, 1}, {0}); }, s, 0, 0,
-                                 "colour array has 1 entries, expected 2 for a 1x2 pattern"));
-  EXPECT_TRUE(ThrowsPatternError([] { Pattern(2, 2, {0, 1, 2, 9}); }, s, 2, 2,
-                                 "unknown stitch code 9 (expected 0-3: 0 knit, 1 purl, 2 front, 3 back)"));
-  EXPECT_TRUE(ThrowsPatternError([] { Pattern(1, 2, {0, 1}, {0, 300}); }, s, 1, 2,
-                                 "colour index 300 out of range 0..255"));
+  EXPECT_TRUE(ThrowsPatternError(
+      [] {
+        Pattern(2, 2, {0, 1, 2});
+      },
+      s, 0, 0, "code array has 3 entries, expected 4 for a 2x2 pattern"));
+  EXPECT_TRUE(ThrowsPatternError(
+      [] {
+        Pattern(1, 2, {0, 1}, {0});
+      },
+      s, 0, 0, "colour array has 1 entries, expected 2 for a 1x2 pattern"));
+  EXPECT_TRUE(ThrowsPatternError(
+      [] {
+        Pattern(2, 2, {0, 1, 2, 9});
+      },
+      s, 2, 2, "unknown stitch code 9 (expected 0-3: 0 knit, 1 purl, 2 front, 3 back)"));
+  EXPECT_TRUE(ThrowsPatternError(
+      [] {
+        Pattern(1, 2, {0, 1}, {0, 300});
+      },
+      s, 1, 2, "colour index 300 out of range 0..255"));
 }
 
 }  // namespace

@@ -40,7 +40,9 @@ const std::map<std::string, Expect>& expected() {
 
 std::filesystem::path dir() { return std::filesystem::path(KNIT_SOURCE_DIR) / "examples/patterns"; }
 
-Pattern load(const std::string& name) { return Pattern::from_file((dir() / (name + ".knit")).string()); }
+Pattern load(const std::string& name) {
+  return Pattern::from_file((dir() / (name + ".knit")).string());
+}
 
 TEST(PatternExamples, EveryFileParsesWithExpectedShape) {
   std::set<std::string> seen;
@@ -69,7 +71,8 @@ template <class F>
 void expect_cells(const std::string& name, F f) {
   Pattern p = load(name);
   for (int r = 0; r < p.rows(); ++r)
-    for (int c = 0; c < p.cols(); ++c) EXPECT_EQ(p.code(r, c), f(r, c)) << name << " " << r << "," << c;
+    for (int c = 0; c < p.cols(); ++c)
+      EXPECT_EQ(p.code(r, c), f(r, c)) << name << " " << r << "," << c;
 }
 
 TEST(PatternExamples, StructureMatchesTheName) {
