@@ -6,6 +6,7 @@
 // stitch (F, float in front), 3 back slip stitch (B, float behind).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -39,6 +40,9 @@ class Pattern {
   static constexpr int kMaxRows = 4096;
   static constexpr int kMaxCols = 4096;
   static constexpr int kMaxColors = 256;
+  // Largest text parse() and from_file() accept: room for the canonical text
+  // of a kMaxRows x kMaxCols pattern with three-digit colours (~96 MiB).
+  static constexpr std::size_t kMaxTextBytes = std::size_t(128) << 20;
 
   // A 1x1 knit pattern.
   Pattern();
