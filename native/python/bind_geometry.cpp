@@ -195,6 +195,68 @@ class PyKnitSurface {
     return d;
   }
 
+  ::py::dict aggregate(const Arr& u, const Arr& v, const Arr& fx, const Arr& fy, const Arr& wi, int n_points,
+                       double shift_x, double shift_y, double kx, double ky, double max_segment,
+                       int max_steps) const {
+    Points P = points(u, v);
+    auto vec2 = [](const Arr& a, const char* name) {
+      if (a.ndim() != 1 || a.shape(0) != 2) throw ::py::value_error(std::string(name) + " must have shape (2,)");
+      check_finite(name, a.data(), 2);
+      return k::kv3(float(a.data()[0]), float(a.data()[1]), 0.f);
+    };
+    const Vec3 ex = vec2(fx, "footprint_x"), ey = vec2(fy, "footprint_y");
+    if (wi.ndim() != 1 || wi.shape(0) != 3) throw ::py::value_error("wi_local must have shape (3,)");
+    check_finite("wi_local", wi.data(), 3);
+    if (!(wi.data()[2] > 0)) throw ::py::value_error("wi_local must point away from the surface (z > 0)");
+    if (n_points < 1 || n_points > KNIT_MS_MAX_POINTS)
+      throw ::py::value_error("n_points must be in [1, " + std::to_string(KNIT_MS_MAX_POINTS) + "], got " +
+                              std::to_string(n_points));
+    for (double sh : {shift_x, shift_y})
+      if (!(sh >= 0 && sh < 1)) throw ::py::value_error("shift components must be in [0, 1), got " + num(sh));
+    for (double kk : {kx, ky})
+      if (!std::isfinite(kk)) throw ::py::value_error("curvature must be finite, got " + num(kk));
+    if (!(max_segment > 0) || !std::isfinite(max_segment))
+      throw ::py::value_error("max_segment must be finite and > 0, got " + num(max_segment));
+    if (max_steps < 1 || max_steps > 4096)
+      throw ::py::value_error("max_steps must be in [1, 4096], got " + std::to_string(max_steps));
+    const float sc = float(uv_scale_);
+    const Vec3 wl = k::kv3_normalize(k::kv3(float(wi.data()[0]), float(wi.data()[1]), float(wi.data()[2])));
+    const ssize_t n = P.n;
+    ::py::array_t<double> pd(n), layers(n), steps(n), nor = vec_array(n), tan = vec_array(n), sig = vec_array(n);
+    ::py::array_t<int> pts(n), hits(n);
+    ::py::array_t<double> cw({n, ssize_t(KNIT_MS_COLORS)});
+    {
+      ::py::gil_scoped_release nogil;
+      const KnitSurface& S = surf_;
+      for (ssize_t i = 0; i < n; ++i) {
+        const float x = sc * float(P.pu[P.su ? 0 : i]), y = sc * float(P.pv[P.sv ? 0 : i]);
+        const k::KnitAggregate a = k::knit_aggregate(
+            S.geom(), S.codes(), S.colors(), x, y, k::kv3_scale(ex, sc), k::kv3_scale(ey, sc), wl, n_points,
+            float(shift_x), float(shift_y), float(kx), float(ky), float(max_segment), max_steps);
+        pd.mutable_data()[i] = a.p_delta;
+        layers.mutable_data()[i] = a.layers;
+        steps.mutable_data()[i] = a.steps;
+        pts.mutable_data()[i] = a.points;
+        hits.mutable_data()[i] = a.hits;
+        put(nor.mutable_data(i, 0), a.n);
+        put(tan.mutable_data(i, 0), a.tangent);
+        put(sig.mutable_data(i, 0), k::kv3(a.sxx, a.sxy, a.syy));
+        for (int c = 0; c < KNIT_MS_COLORS; ++c) cw.mutable_data(i, c)[0] = a.color_w[c];
+      }
+    }
+    ::py::dict d;
+    d["p_delta"] = pd;
+    d["normal"] = nor;
+    d["tangent"] = tan;
+    d["sigma"] = sig;
+    d["layers"] = layers;
+    d["steps"] = steps;
+    d["points"] = pts;
+    d["hits"] = hits;
+    d["color_weights"] = cw;
+    return d;
+  }
+
   const KnitSurface& surface() const { return surf_; }
   double uv_scale() const { return uv_scale_; }
 
@@ -305,7 +367,19 @@ points from the surface towards the viewer in the local frame at (u, v).
 `frame` (FlatFrame by default, CylinderFrame, SphereFrame) bends the ray with
 the base surface. Returns a dict of arrays: hit, position (N,3, pattern
 space), normal, tangent, layers (tubes crossed by the vertical line through
-the hit), steps (segments marched), stitch, color, row, col.)doc");
+the hit), steps (segments marched), stitch, color, row, col.)doc")
+      .def("aggregate", &PyKnitSurface::aggregate, ::py::arg("u"), ::py::arg("v"), ::py::arg("footprint_x"),
+           ::py::arg("footprint_y"), ::py::arg("wi_local"), ::py::arg("n_points") = 16,
+           ::py::arg("shift_x") = 0.5, ::py::arg("shift_y") = 0.5, ::py::arg("kx") = 0.0, ::py::arg("ky") = 0.0,
+           ::py::arg("max_segment") = 6.2832, ::py::arg("max_steps") = 32, R"doc(
+Multi-scale aggregation over a pixel footprint (paper Sec. 5.1, 6.2) at UV
+points: footprint_x = (du/dx, dv/dx) and footprint_y = (du/dy, dv/dy) span the
+footprint in UV (scaled by uv_scale to pattern space); n_points Sobol' points
+(more for footprints over 16 cells, up to 64), shifted by (shift_x, shift_y),
+are marched with CAPM along -wi_local on a base of curvature (kx, ky).
+Returns a dict of arrays: p_delta (pass-through probability), normal and
+tangent (N,3, means), sigma (N,3: LEAN slope covariance xx, xy, yy), layers,
+steps (mean CAPM segments), points, hits, color_weights (N,8).)doc");
 
   m.def(
       "explicit_yarns",

@@ -46,6 +46,7 @@ def main():
         return 0
     sys.path.insert(0, os.environ.get("KNIT_PYTHON_DIR", os.path.join(ROOT, "build", "python")))
     import knitshade  # noqa: E402  (the module built by this project)
+    import numpy as np  # noqa: E402
     res = 8
     r = subprocess.run([testshade, "-g", str(res), str(res), "--print", "-o", "zq", "zq", "-o", "zc", "zc",
                         "-o", "pd", "pd", "kernel_smoke"], cwd=out, capture_output=True, text=True)
@@ -65,17 +66,23 @@ def main():
             values.setdefault(pix, {})[name.strip()] = float(val)
     pattern = knitshade.Pattern.from_rows([[0, 1], [1, 0]], colors=[[0, 0], [1, 1]])
     surf = knitshade.KnitSurface(pattern, knitshade.StitchParams(1.5, 4.0, 1.0, 0.65))
-    bad = 0
+    bad = bad_pd = 0
     for (x, y), v in sorted(values.items()):
-        # testshade shades pixel centres: u = (x + 0.5) / res, v = (y + 0.5) / res
-        uu, vv = 20.0 * (x + 0.5) / res, 20.0 * (y + 0.5) / res
+        # testshade's u, v run from 0 at the first pixel to 1 at the last
+        uu, vv = 20.0 * x / (res - 1), 20.0 * y / (res - 1)
         q = surf.query(uu, vv)
         zq = float(q["z"][0]) if q["hit"][0] else -1.0
         if abs(zq - v["zq"]) > 2e-3:
             print(f"pixel {x},{y}: query z OSL {v['zq']} C++ {zq}")
             bad += 1
-    print(f"{len(values)} pixels compared, {bad} mismatches in the vertical query")
-    return 1 if bad else 0
+        a = surf.aggregate(uu, vv, np.array([6.0, 0.0]), np.array([0.0, 6.0]), np.array([0.0, 0.0, 1.0]),
+                           n_points=16, shift_x=0.3, shift_y=0.6)
+        if abs(float(a["p_delta"][0]) - v["pd"]) > 1e-6:
+            print(f"pixel {x},{y}: aggregate p_delta OSL {v['pd']} C++ {float(a['p_delta'][0])}")
+            bad_pd += 1
+    print(f"{len(values)} pixels compared: {bad} mismatches in the vertical query, "
+          f"{bad_pd} in the multi-scale p_delta")
+    return 1 if bad or bad_pd else 0
 
 
 if __name__ == "__main__":
