@@ -58,6 +58,20 @@ KNIT_FN KnitCapm knit_capm_begin(KnitGeom g, float x, float y, kvec3 wi_local) {
   return st;
 }
 
+/* Start at pattern point p inside or on the shell travelling along dir_local
+ * (any direction): for rays that reach the fabric from behind, which enter
+ * the shell at its bottom (z = -shell_top) going up. Leaving through the top
+ * then ends the march as ESCAPED, through the bottom as THROUGH. */
+KNIT_FN KnitCapm knit_capm_begin_at(kvec3 p, kvec3 dir_local) {
+  KnitCapm st;
+  st.p = p;
+  st.D = kv3_normalize(dir_local);
+  st.steps = 0;
+  st.state = KNIT_CAPM_MARCHING;
+  st.hit = knit_line_hit_none();
+  return st;
+}
+
 /* Length of the next segment along st.D: to the shell's bottom (descending)
  * or top (climbing), and at most max_segment of horizontal travel. */
 KNIT_FN float knit_capm_segment(KnitGeom g, KnitCapm st, float max_segment) {
@@ -166,15 +180,29 @@ KNIT_FN kvec3 knit_curved_frame_dir(kvec3 d0, float kx, float ky, float dx, floa
   return kv3(x1, cy * KY(d0) - sy * z1, sy * KY(d0) + cy * z1);
 }
 
-/* The whole march on a base of constant curvature (flat: kx = ky = 0), for
- * hosts without a frame field (OSL uses this with the shading point's
- * curvature). Midpoint rule: each segment uses the ray direction in the
- * frame at its predicted midpoint. */
-KNIT_FN KnitCapm knit_capm_curved(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
-                                  float x, float y, kvec3 wi_local, float kx, float ky,
-                                  float max_segment, int max_steps) {
-  KnitCapm st = knit_capm_begin(g, x, y, wi_local);
-  kvec3 d0 = st.D;
+/* Where a view ray enters the shell, for either side of the fabric: wi_local
+ * points from the surface to the viewer in the frame at the base hit (x, y).
+ * wi.z > 0: the viewer is in front, the ray enters at (x, y, shell_top)
+ * going down (knit_capm_begin). wi.z < 0: the viewer is behind the base mesh
+ * (the mesh is the shell's top), so the ray crossed the shell before reaching
+ * (x, y, shell_top): it is marched from where it entered the shell's bottom,
+ * going up; leaving through the top (ESCAPED) means it passed through. */
+KNIT_FN KnitCapm knit_capm_start(KnitGeom g, float x, float y, kvec3 wi_local) {
+  kvec3 d = kv3_neg(kv3_normalize(wi_local));
+  if (KZ(d) > KF(1.0e-6)) {
+    float back = KF(2.0) * g.shell_top / KZ(d);
+    return knit_capm_begin_at(kv3_madd(kv3(x, y, g.shell_top), d, -back), d);
+  }
+  return knit_capm_begin(g, x, y, wi_local);
+}
+
+/* March st on a base of constant curvature (flat: kx = ky = 0) whose frame at
+ * (x, y) sees the ray as d0: midpoint rule and hit corrector as in the host
+ * loop (KnitSurface::capm). */
+KNIT_FN KnitCapm knit_capm_march_curved(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+                                        KnitCapm start, float x, float y, kvec3 d0, float kx, float ky,
+                                        float max_segment, int max_steps) {
+  KnitCapm st = start;
   int curved = (kx != KF(0.0) || ky != KF(0.0)) ? 1 : 0;
   int i;
   for (i = 0; i < max_steps && st.state == KNIT_CAPM_MARCHING; i++) {
@@ -195,6 +223,18 @@ KNIT_FN KnitCapm knit_capm_curved(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY
       st = knit_capm_bend(g, st, knit_curved_frame_dir(d0, kx, ky, KX(st.p) - x, KY(st.p) - y));
   }
   return st;
+}
+
+/* The whole march for a view ray hitting the base at (x, y), either side
+ * (knit_capm_start), on a base of constant curvature (flat: kx = ky = 0):
+ * what hosts without a frame field run (OSL, with the shading point's
+ * curvature). */
+KNIT_FN KnitCapm knit_capm_curved(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+                                  float x, float y, kvec3 wi_local, float kx, float ky,
+                                  float max_segment, int max_steps) {
+  KnitCapm st = knit_capm_start(g, x, y, wi_local);
+  return knit_capm_march_curved(g, codes, colors, st, x, y, kv3_neg(kv3_normalize(wi_local)), kx, ky,
+                                max_segment, max_steps);
 }
 
 #endif /* KNIT_KERNEL_CAPM_H */

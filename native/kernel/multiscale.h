@@ -78,7 +78,8 @@ KNIT_FN float knit_frac(float x) { return x - k_floor(x); }
  * shift_x/y in [0,1): per-shading-point Cranley-Patterson shift. The base is
  * of constant curvature (kx, ky) (flat: 0); every footprint point uses the
  * same local view direction wi_local (the frame is treated as constant across
- * the footprint, which the footprint's smallness justifies). */
+ * the footprint, which the footprint's smallness justifies); wi_local.z < 0
+ * views the fabric from behind (knit_capm_start). */
 KNIT_FN KnitAggregate knit_aggregate(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
                                      float x, float y, kvec3 fx, kvec3 fy, kvec3 wi_local,
                                      int n_points, float shift_x, float shift_y, float kx, float ky,

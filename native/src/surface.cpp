@@ -95,17 +95,29 @@ SurfaceHit KnitSurface::capm(float x, float y, Vec3 wi_local, const FrameProvide
                              const CapmOptions& opt) const {
   static const FlatFrame flat_frame;
   const FrameProvider& fp = frame ? *frame : flat_frame;
-  if (!(opt.max_steps >= 1) || !(opt.max_segment > 0) || !(opt.max_bend > 0))
-    throw std::invalid_argument("CapmOptions: max_steps must be >= 1, max_segment and max_bend > 0");
   Vec3 t, b, n;
   fp.frame(x, y, t, b, n);
   const Vec3 wi = k::kv3_normalize(wi_local);
   const Vec3 ray_world = k::kv3_neg(k::kv3_from_local(wi, t, b, n));
-  const Vec3 kappa = fp.curvature(x, y);
+  return to_hit(march(k::knit_capm_start(geom_, x, y, wi), ray_world, frame, opt));
+}
+
+k::KnitCapm KnitSurface::march(k::KnitCapm start, Vec3 ray_world, const FrameProvider* frame,
+                               const CapmOptions& opt) const {
+  static const FlatFrame flat_frame;
+  const FrameProvider& fp = frame ? *frame : flat_frame;
+  if (!(opt.max_steps >= 1) || !(opt.max_segment > 0) || !(opt.max_bend > 0))
+    throw std::invalid_argument("CapmOptions: max_steps must be >= 1, max_segment and max_bend > 0");
+  const Vec3 kappa = fp.curvature(start.p.x, start.p.y);
   const float kmax = std::max(std::abs(kappa.x), std::abs(kappa.y));
   const float seg = kmax > 0 ? std::min(opt.max_segment, opt.max_bend / kmax) : opt.max_segment;
-  k::KnitCapm st = k::knit_capm_begin(geom_, x, y, wi);
   const bool flat = frame == nullptr || dynamic_cast<const FlatFrame*>(frame) != nullptr;
+  Vec3 t, b, n;
+  k::KnitCapm st = start;
+  if (!flat) {
+    fp.frame(st.p.x, st.p.y, t, b, n);
+    st = k::knit_capm_aim(st, k::kv3_to_local(ray_world, t, b, n));
+  }
   while (st.state == KNIT_CAPM_MARCHING) {
     if (!flat) {  // midpoint rule: aim the segment with the frame at its middle
       const Vec3 m = k::knit_capm_midpoint(geom_, st, seg);
@@ -113,8 +125,7 @@ SurfaceHit KnitSurface::capm(float x, float y, Vec3 wi_local, const FrameProvide
       st = k::knit_capm_aim(st, k::kv3_to_local(ray_world, t, b, n));
     }
     const k::KnitCapm before = st;
-    st = k::knit_capm_step(geom_, codes(), colors(), st, seg, opt.max_steps, kappa.x,
-                           kappa.y);
+    st = k::knit_capm_step(geom_, codes(), colors(), st, seg, opt.max_steps, kappa.x, kappa.y);
     if (st.state == KNIT_CAPM_HIT && !flat) {
       const Vec3 m = k::knit_capm_hit_midpoint(before, st);
       fp.frame(m.x, m.y, t, b, n);
@@ -125,6 +136,10 @@ SurfaceHit KnitSurface::capm(float x, float y, Vec3 wi_local, const FrameProvide
     fp.frame(st.p.x, st.p.y, t, b, n);
     st = k::knit_capm_bend(geom_, st, k::kv3_to_local(ray_world, t, b, n));
   }
+  return st;
+}
+
+SurfaceHit KnitSurface::to_hit(const k::KnitCapm& st) const {
   SurfaceHit s;
   s.steps = st.steps;
   s.hit = st.state == KNIT_CAPM_HIT;

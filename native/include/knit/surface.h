@@ -108,6 +108,14 @@ class KnitSurface {
   SurfaceHit capm(float x, float y, Vec3 wi_local, const FrameProvider* frame = nullptr,
                   const CapmOptions& opt = {}) const;
 
+  // The CAPM march from any start (k::knit_capm_start / begin_at), bending
+  // the world-space ray `ray_world` (the direction it travels) with the
+  // frames of `frame` (flat if null; its curvature() sets the metric and the
+  // segment length). Returns the final kernel state.
+  k::KnitCapm march(k::KnitCapm start, Vec3 ray_world, const FrameProvider* frame,
+                    const CapmOptions& opt = {}) const;
+  SurfaceHit to_hit(const k::KnitCapm& st) const;
+
   // The kernel's view of this surface (for hosts that call the kernel directly).
   const k::KnitGeom& geom() const { return geom_; }
   const int32_t* codes() const { return pattern_.codes().data(); }

@@ -1,0 +1,103 @@
+// KnitMaterial: the knit model as a renderer sees it. At a hit of the base
+// mesh it runs the geometry (CAPM or the flat height query, near-field or
+// multi-scale) and returns what shading needs: pass straight through, or a
+// yarn shading frame, the BSDF point (colour, layers, ply shadow, p_delta) and
+// the kernel BSDF to evaluate there. docs/renderer-integration.md.
+//
+// Conventions. The base mesh is the top of the yarn shell (paper Sec. 3.3,
+// Alg. 1): a ray hitting the mesh from the front enters pattern space at
+// (x, y, shell_top); a ray arriving from behind has crossed the shell before
+// reaching the mesh and is marched from where it entered the shell's bottom.
+// Pattern space is isotropic: pattern units = pattern_per_world x world
+// units in every direction (tangents t, b and normal n).
+#pragma once
+
+#include <array>
+#include <memory>
+
+#include "knit/bsdf.h"
+#include "knit/ply_profile.h"
+#include "knit/surface.h"
+
+namespace knit {
+
+enum class KnitMode { NearField = 0, MultiScale = 1 };
+
+struct KnitMaterialParams {
+  StitchParams stitch;
+  YarnBsdfParams bsdf;
+  PlyParams ply;
+  bool ply_detail = true;       // wrap the ply/fibre profile around the yarn
+  KnitMode mode = KnitMode::NearField;
+  bool capm = true;             // false: no parallax, the height query at the hit's (u, v)
+  int footprint_points = 16;    // multi-scale Sobol' points (docs/multiscale.md)
+  float uv_scale = 40.0f;       // pattern units per UV unit (x = uv_scale u, y = uv_scale v)
+  CapmOptions capm_options;
+
+  // Throws std::invalid_argument naming the field and value.
+  void validate() const;
+};
+
+// What the host knows at a hit of the base mesh.
+struct BaseHit {
+  float u = 0, v = 0;                 // texture coordinates
+  Vec3 t{1, 0, 0}, b{0, 1, 0}, n{0, 0, 1};  // orthonormal world frame: t along dP/du, n the front side
+  float pattern_per_world = 1;        // uv_scale / |dP/du|: pattern units per world unit
+  float kx = 0, ky = 0;               // normal curvature along t and b (1 / world units; > 0 convex)
+  // Footprint of the pixel in UV (multi-scale): (du/dx, dv/dx), (du/dy, dv/dy).
+  float dudx = 0, dvdx = 0, dudy = 0, dvdy = 0;
+};
+
+struct KnitShade {
+  bool pass_through = true;  // no yarn on this ray: continue straight on
+  bool from_back = false;    // the ray reached the fabric from behind the mesh
+  Vec3 st{}, sb{}, sn{};     // world shading frame: yarn tangent, bitangent, surface normal
+  Vec3 offset{};             // world offset from the base hit to the yarn hit
+  BsdfPoint point;           // colour index, layers, ply shadow, p_delta
+  Rgb kd_r, kd_t;            // body colours at this point (multi-scale: mixed over the footprint)
+  k::KMicrofacet spec_r{}, spec_t{};  // specular lobes at this point (multi-scale: LEAN-widened)
+  int steps = 0;             // CAPM segments marched (summed over footprint points)
+};
+
+class KnitMaterial {
+ public:
+  KnitMaterial(Pattern pattern, KnitMaterialParams params);  // validates
+
+  const KnitMaterialParams& params() const { return params_; }
+  const KnitSurface& surface() const { return surface_; }
+  const YarnBsdf& bsdf() const { return bsdf_; }
+  const PlyProfile& ply() const { return ply_; }
+
+  // Geometry and shading point for a ray travelling along ray_dir (world,
+  // unit) that hit the base mesh. `frame` bends CAPM rays on curved meshes
+  // (null: the base curvature in `hit`, flat when zero). `shift` is the
+  // multi-scale footprint sample shift, in [0, 1)^2.
+  KnitShade shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
+                  std::array<float, 2> shift = {0.5f, 0.5f}) const;
+
+  // Fraction of light a shadow ray along ray_dir passes through the fabric
+  // here: near-field 0 or 1 (a gap or a yarn), multi-scale p_delta.
+  float transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
+                      std::array<float, 2> shift = {0.5f, 0.5f}) const;
+
+  // The kernel BSDF at a shading point (colour from the palette, roughness,
+  // layers and ply shadow from `sh`).
+  k::KYarnBsdf kernel_bsdf(const KnitShade& sh) const;
+
+  // Memory the model keeps: pattern arrays, ply table, parameters (bytes).
+  size_t state_bytes() const;
+
+ private:
+  k::KnitCapm march(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame) const;
+  void set_colors(KnitShade& sh, int color_index) const;
+
+  Pattern pattern_;
+  KnitMaterialParams params_;
+  KnitSurface surface_;
+  YarnBsdf bsdf_;
+  PlyProfile ply_;
+  float arc_per_t_ = 1;     // mean arc length of the yarn per unit of curve parameter
+  float mean_shadow_ = 1;   // ply shadow averaged around and along the yarn
+};
+
+}  // namespace knit

@@ -1,0 +1,254 @@
+// KnitMaterial: geometry and shading point of the knit model at a base hit.
+#include "knit/shading.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "knit/yarns.h"
+
+namespace knit {
+namespace {
+
+std::string num(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+Vec3 add3(Vec3 a, Vec3 b, Vec3 c) { return k::kv3_add(k::kv3_add(a, b), c); }
+
+// World vector of local components l in the frame (t, b, n).
+Vec3 to_world(Vec3 l, Vec3 t, Vec3 b, Vec3 n) {
+  return add3(k::kv3_scale(t, l.x), k::kv3_scale(b, l.y), k::kv3_scale(n, l.z));
+}
+
+// The frame at pattern offset (dx, dy) on a base of constant curvature: the
+// entry frame turned as in k::knit_curved_frame_dir.
+void curved_frame(Vec3 t0, Vec3 b0, Vec3 n0, float kx, float ky, float dx, float dy, Vec3& t, Vec3& b,
+                  Vec3& n) {
+  const float ax = kx * dx, ay = ky * dy;
+  const float cx = std::cos(ax), sx = std::sin(ax), cy = std::cos(ay), sy = std::sin(ay);
+  const Vec3 t1 = k::kv3_sub(k::kv3_scale(t0, cx), k::kv3_scale(n0, sx));
+  const Vec3 n1 = k::kv3_add(k::kv3_scale(t0, sx), k::kv3_scale(n0, cx));
+  t = t1;
+  b = k::kv3_sub(k::kv3_scale(b0, cy), k::kv3_scale(n1, sy));
+  n = k::kv3_add(k::kv3_scale(b0, sy), k::kv3_scale(n1, cy));
+}
+
+}  // namespace
+
+void KnitMaterialParams::validate() const {
+  stitch.validate();
+  bsdf.validate();
+  if (ply_detail) ply.validate();
+  auto bad = [](const std::string& field, const std::string& value, const char* rule) {
+    throw std::invalid_argument("KnitMaterialParams." + field + " = " + value + ": " + rule);
+  };
+  if (!std::isfinite(uv_scale) || !(uv_scale > 0) || uv_scale > 1e6f)
+    bad("uv_scale", num(uv_scale), "must be finite, > 0 and at most 1e6");
+  if (footprint_points < 1 || footprint_points > KNIT_MS_MAX_POINTS)
+    bad("footprint_points", std::to_string(footprint_points), "must be in [1, 64]");
+  if (capm_options.max_steps < 1 || capm_options.max_steps > 4096)
+    bad("capm_options.max_steps", std::to_string(capm_options.max_steps), "must be in [1, 4096]");
+  if (!(capm_options.max_segment > 0) || !std::isfinite(capm_options.max_segment))
+    bad("capm_options.max_segment", num(capm_options.max_segment), "must be finite and > 0");
+  if (!(capm_options.max_bend > 0) || !std::isfinite(capm_options.max_bend))
+    bad("capm_options.max_bend", num(capm_options.max_bend), "must be finite and > 0");
+}
+
+KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
+    : pattern_(std::move(pattern)),
+      params_((params.validate(), std::move(params))),
+      surface_(pattern_, params_.stitch),
+      bsdf_(params_.bsdf),
+      ply_(params_.ply) {
+  if (pattern_.num_colors() > params_.bsdf.num_colors())
+    throw std::invalid_argument("KnitMaterialParams.bsdf: the pattern uses " + std::to_string(pattern_.num_colors()) +
+                                " colour indices but " + std::to_string(params_.bsdf.num_colors()) +
+                                " yarn colours are given");
+  // Mean arc length per unit of curve parameter, over one stitch of knit.
+  const Pattern knit = Pattern::from_rows({{0}});
+  double len = 0;
+  const int n = 256;
+  for (int i = 0; i < n; ++i) {
+    const CurvePoint c = yarn_curve_exact(knit, params_.stitch, 0, 6.283185307179586 * (i + 0.5) / n);
+    len += std::sqrt(c.dp[0] * c.dp[0] + c.dp[1] * c.dp[1] + c.dp[2] * c.dp[2]);
+  }
+  arc_per_t_ = float(len / n);
+  double g = 0;
+  for (int i = 0; i < 64; ++i)
+    for (int j = 0; j < 16; ++j) g += ply_.lookup(6.2831853f * (i + 0.5f) / 64, 0.37f * float(j)).shadow;
+  mean_shadow_ = params_.ply_detail ? float(g / (64 * 16)) : 1.0f;
+}
+
+size_t KnitMaterial::state_bytes() const {
+  return sizeof(*this) + pattern_.codes().size() * sizeof(int32_t) +
+         pattern_.colors_or_zero().size() * sizeof(int32_t) + PlyProfile::table_bytes() +
+         2 * sizeof(Rgb) * size_t(params_.bsdf.num_colors());
+}
+
+k::KnitCapm KnitMaterial::march(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame) const {
+  const float x = params_.uv_scale * hit.u, y = params_.uv_scale * hit.v;
+  const Vec3 wi = k::kv3_neg(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n));
+  const k::KnitCapm start = k::knit_capm_start(surface_.geom(), x, y, wi);
+  if (frame) return surface_.march(start, ray_dir, frame, params_.capm_options);
+  const float S = hit.pattern_per_world;
+  const float kx = hit.kx / S, ky = hit.ky / S;
+  const float kmax = std::max(std::abs(kx), std::abs(ky));
+  const CapmOptions& o = params_.capm_options;
+  const float seg = kmax > 0 ? std::min(o.max_segment, o.max_bend / kmax) : o.max_segment;
+  return k::knit_capm_march_curved(surface_.geom(), surface_.codes(), surface_.colors(), start, x, y,
+                                   k::kv3_neg(k::kv3_normalize(wi)), kx, ky, seg, o.max_steps);
+}
+
+void KnitMaterial::set_colors(KnitShade& sh, int color_index) const {
+  const int c = std::clamp(color_index, 0, params_.bsdf.num_colors() - 1);
+  sh.point.color = c;
+  sh.kd_r = params_.bsdf.reflect_colors[size_t(c)];
+  sh.kd_t = params_.bsdf.transmit_colors[size_t(c)];
+}
+
+KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
+                              std::array<float, 2> shift) const {
+  KnitShade sh;
+  const YarnBsdfParams& bp = params_.bsdf;
+  sh.spec_r = k::bsdf_mf_make(bp.roughness_x, bp.roughness_y, bp.eta);
+  sh.spec_t = k::bsdf_mf_make(bp.trans_roughness_x, bp.trans_roughness_y, bp.eta);
+  const float S = hit.pattern_per_world;
+  const float x = params_.uv_scale * hit.u, y = params_.uv_scale * hit.v;
+  const Vec3 wi = k::kv3_neg(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n));
+  sh.from_back = wi.z < 0;
+  const float top = surface_.shell_top();
+
+  if (params_.mode == KnitMode::MultiScale) {
+    const float us = params_.uv_scale;
+    const k::KnitAggregate a = k::knit_aggregate(
+        surface_.geom(), surface_.codes(), surface_.colors(), x, y, k::kv3(us * hit.dudx, us * hit.dvdx, 0),
+        k::kv3(us * hit.dudy, us * hit.dvdy, 0), wi, params_.footprint_points, shift[0], shift[1], hit.kx / S,
+        hit.ky / S, params_.capm_options.max_segment, params_.capm_options.max_steps);
+    sh.steps = int(a.steps * float(a.points) + 0.5f);
+    if (a.hits == 0) return sh;
+    sh.pass_through = false;
+    sh.point.p_delta = a.p_delta;
+    sh.point.layers = std::max(1, int(std::lround(a.layers)));
+    sh.point.shadow = mean_shadow_;
+    // Mixed body colour over the footprint's colour indices.
+    Rgb r{0, 0, 0}, t{0, 0, 0};
+    float best = -1;
+    for (int c = 0; c < KNIT_MS_COLORS; ++c) {
+      const float w = a.color_w[c];
+      if (w <= 0) continue;
+      const int ci = std::min(c, bp.num_colors() - 1);
+      r.r += w * bp.reflect_colors[size_t(ci)].r;
+      r.g += w * bp.reflect_colors[size_t(ci)].g;
+      r.b += w * bp.reflect_colors[size_t(ci)].b;
+      t.r += w * bp.transmit_colors[size_t(ci)].r;
+      t.g += w * bp.transmit_colors[size_t(ci)].g;
+      t.b += w * bp.transmit_colors[size_t(ci)].b;
+      if (w > best) {
+        best = w;
+        sh.point.color = ci;
+      }
+    }
+    sh.kd_r = r;
+    sh.kd_t = t;
+    // Shading frame: mean normal, mean tangent made orthogonal to it; then the
+    // LEAN covariance, rotated into that frame, widens the specular lobes.
+    const Vec3 n = k::kv3_normalize(a.n);
+    Vec3 tg = k::kv3_sub(a.tangent, k::kv3_scale(n, k::kv3_dot(a.tangent, n)));
+    if (k::kv3_len(tg) < 1e-4f) tg = k::kv3_cross(k::kv3(0, 1, 0), n);
+    tg = k::kv3_normalize(tg);
+    const float th = std::atan2(tg.y, tg.x);
+    const float c = std::cos(th), s = std::sin(th);
+    const float sxx = c * c * a.sxx + 2 * c * s * a.sxy + s * s * a.syy;
+    const float syy = s * s * a.sxx - 2 * c * s * a.sxy + c * c * a.syy;
+    const float sxy = (c * c - s * s) * a.sxy + c * s * (a.syy - a.sxx);
+    const k::KLeanRoughness lr = k::bsdf_lean_to_ggx(bp.roughness_x, bp.roughness_y, sxx, sxy, syy);
+    const k::KLeanRoughness lt = k::bsdf_lean_to_ggx(bp.trans_roughness_x, bp.trans_roughness_y, sxx, sxy, syy);
+    const Vec3 bt = k::kv3_cross(n, tg);
+    const Vec3 tu = k::kv3_add(k::kv3_scale(tg, std::cos(lr.angle)), k::kv3_scale(bt, std::sin(lr.angle)));
+    sh.spec_r = k::bsdf_mf_make(std::min(lr.alpha_u, 1.0f), std::min(lr.alpha_v, 1.0f), bp.eta);
+    // The transmission lobe shares the reflection lobe's rotated axes; its
+    // widened roughness uses the same covariance.
+    sh.spec_t = k::bsdf_mf_make(std::min(lt.alpha_u, 1.0f), std::min(lt.alpha_v, 1.0f), bp.eta);
+    const Vec3 local_t = tu, local_n = n, local_b = k::kv3_cross(n, tu);
+    sh.st = to_world(local_t, hit.t, hit.b, hit.n);
+    sh.sb = to_world(local_b, hit.t, hit.b, hit.n);
+    sh.sn = to_world(local_n, hit.t, hit.b, hit.n);
+    const Vec3 d = k::kv3_sub(a.position, k::kv3(x, y, top));
+    sh.offset = k::kv3_scale(to_world(d, hit.t, hit.b, hit.n), 1.0f / S);
+    return sh;
+  }
+
+  // Near field: one ray, CAPM or (no parallax) the height query at (x, y).
+  k::KnitLineHit h;
+  if (params_.capm) {
+    const k::KnitCapm st = march(hit, ray_dir, frame);
+    sh.steps = st.steps;
+    if (st.state != KNIT_CAPM_HIT) return sh;
+    h = st.hit;
+  } else {
+    const Vec3 o = k::kv3(x, y, sh.from_back ? -top - 0.01f : top + 0.01f);
+    h = k::knit_line_query(surface_.geom(), surface_.codes(), surface_.colors(), o,
+                           k::kv3(0, 0, sh.from_back ? 1.0f : -1.0f), 0, 2 * top + 0.02f, 0);
+    sh.steps = 1;
+    if (!h.hit) return sh;
+    // Without parallax the hit is where the ray met the mesh.
+    h.p = k::kv3(x, y, h.p.z);
+  }
+  sh.pass_through = false;
+  sh.point.layers = std::max(1, k::knit_vertical_query(surface_.geom(), surface_.codes(), surface_.colors(),
+                                                       h.p.x, h.p.y)
+                                    .crossings);
+  set_colors(sh, h.colour);
+  // Base frame at the yarn hit.
+  Vec3 ft = hit.t, fb = hit.b, fn = hit.n;
+  if (frame) {
+    frame->frame(h.p.x, h.p.y, ft, fb, fn);
+  } else if (hit.kx != 0 || hit.ky != 0) {
+    curved_frame(hit.t, hit.b, hit.n, hit.kx / S, hit.ky / S, h.p.x - x, h.p.y - y, ft, fb, fn);
+  }
+  // Yarn frame (pattern-local): tangent along the yarn, normal of the tube.
+  const Vec3 N = k::kv3_normalize(h.n);
+  Vec3 T = k::kv3_sub(h.tangent, k::kv3_scale(N, k::kv3_dot(h.tangent, N)));
+  T = k::kv3_len(T) > 1e-6f ? k::kv3_normalize(T) : k::kv3_normalize(k::kv3_cross(k::kv3(0, 1, 0), N));
+  Vec3 lt = T, ln = N, lb = k::kv3_cross(N, T);
+  if (params_.ply_detail) {
+    // Azimuth around the yarn from the fabric normal's projection; arc length from t.
+    Vec3 ref = k::kv3_sub(k::kv3(0, 0, 1), k::kv3_scale(h.tangent, h.tangent.z));
+    if (k::kv3_len(ref) < 1e-4f) ref = k::kv3(1, 0, 0);
+    ref = k::kv3_normalize(ref);
+    const Vec3 tt = k::kv3_normalize(h.tangent);
+    const float phi = std::atan2(k::kv3_dot(N, k::kv3_cross(tt, ref)), k::kv3_dot(N, ref));
+    const k::KPlyShade ps = ply_.lookup(phi, h.t * arc_per_t_);
+    sh.point.shadow = ps.shadow;
+    lt = to_world(ps.t, T, lb, N);
+    ln = to_world(ps.n, T, lb, N);
+    lb = to_world(ps.b, T, lb, N);
+  }
+  sh.st = to_world(lt, ft, fb, fn);
+  sh.sb = to_world(lb, ft, fb, fn);
+  sh.sn = to_world(ln, ft, fb, fn);
+  const Vec3 d = k::kv3_sub(h.p, k::kv3(x, y, top));
+  sh.offset = k::kv3_scale(to_world(d, hit.t, hit.b, hit.n), 1.0f / S);
+  return sh;
+}
+
+float KnitMaterial::transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
+                                  std::array<float, 2> shift) const {
+  const KnitShade sh = shade(hit, ray_dir, frame, shift);
+  if (sh.pass_through) return 1.0f;
+  return params_.mode == KnitMode::MultiScale ? sh.point.p_delta : 0.0f;
+}
+
+k::KYarnBsdf KnitMaterial::kernel_bsdf(const KnitShade& sh) const {
+  const YarnBsdfParams& bp = params_.bsdf;
+  const k::KAttenuation att = k::bsdf_att_make(bp.optical_depth, std::min(sh.point.layers, 4));
+  return k::yarn_bsdf_make(sh.spec_r, sh.spec_t, k::kv3(sh.kd_r.r, sh.kd_r.g, sh.kd_r.b),
+                           k::kv3(sh.kd_t.r, sh.kd_t.g, sh.kd_t.b), bp.body_energy, bp.body_reflect,
+                           sh.point.shadow, att);
+}
+
+}  // namespace knit

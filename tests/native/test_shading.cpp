@@ -1,0 +1,173 @@
+// KnitMaterial: the renderer-facing shading layer over the geometry and the
+// BSDF, checked against KnitSurface and against explicit-tube ray casts from
+// both sides of the fabric.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "groundtruth.h"
+#include "knit/shading.h"
+#include "test_patterns.h"
+
+namespace {
+
+using namespace knit;
+using namespace knit::test;
+
+KnitMaterialParams flat_params(float uv_scale = 1) {
+  KnitMaterialParams p;
+  p.uv_scale = uv_scale;
+  return p;
+}
+
+TEST(Shading, FrontNearFieldMatchesCapmAndExplicitTubes) {
+  GroundTruthScene sc(seed(), StitchParams{}, 0, 45);
+  KnitMaterialParams mp = flat_params();
+  mp.ply_detail = false;
+  KnitMaterial m(seed(), mp);
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> U(0, 1);
+  int n = 0, agree = 0, both = 0;
+  double normal_err = 0;
+  for (int i = 0; i < 600; ++i) {
+    const double x = sc.x0 + (sc.x1 - sc.x0) * U(rng), y = sc.y0 + (sc.y1 - sc.y0) * U(rng);
+    const double th = 1.3 * U(rng), ph = 6.283 * U(rng);
+    const D3 wi = {std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)};
+    D3 o, d;
+    sc.entry_ray(x, y, wi, o, d);
+    const TubeHit gt = sc.tubes.intersect(o, d, 0, sc.shell_exit(o, d));
+    BaseHit bh;
+    bh.u = float(x);
+    bh.v = float(y);
+    const KnitShade sh = m.shade(bh, k::kv3(float(d[0]), float(d[1]), float(d[2])), nullptr);
+    ++n;
+    if (sh.pass_through == !gt.hit) ++agree;
+    if (gt.hit && !sh.pass_through) {
+      ++both;
+      normal_err += angle_deg({sh.sn.x, sh.sn.y, sh.sn.z}, gt.normal);
+      // The offset leads from the base hit (x, y, shell_top) to the yarn hit.
+      const D3 p = {x + sh.offset.x, y + sh.offset.y, sc.surface.shell_top() + sh.offset.z};
+      EXPECT_LT(norm(sub(p, gt.p)), 0.25) << i;
+    }
+  }
+  EXPECT_GE(agree, n * 97 / 100);
+  EXPECT_LT(normal_err / both, 2.0);
+}
+
+TEST(Shading, RaysFromBehindHitTheBackOfTheFabric) {
+  GroundTruthScene sc(rib_1x1(), StitchParams{}, 0, 45);
+  KnitMaterialParams mp = flat_params();
+  mp.ply_detail = false;
+  KnitMaterial m(rib_1x1(), mp);
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> U(0, 1);
+  const double top = sc.surface.shell_top();
+  int n = 0, agree = 0, both = 0;
+  double zerr = 0;
+  for (int i = 0; i < 600; ++i) {
+    const double x = sc.x0 + (sc.x1 - sc.x0) * U(rng), y = sc.y0 + (sc.y1 - sc.y0) * U(rng);
+    const double th = 1.2 * U(rng), ph = 6.283 * U(rng);
+    // The ray travels upwards and meets the mesh (z = top) at (x, y).
+    const D3 d = {std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)};
+    const double back = 2 * top / d[2];
+    const D3 o = {x - back * d[0], y - back * d[1], -top};
+    const TubeHit gt = sc.tubes.intersect(o, d, 0, back);
+    BaseHit bh;
+    bh.u = float(x);
+    bh.v = float(y);
+    const KnitShade sh = m.shade(bh, k::kv3(float(d[0]), float(d[1]), float(d[2])), nullptr);
+    ++n;
+    EXPECT_TRUE(sh.from_back);
+    if (sh.pass_through == !gt.hit) ++agree;
+    if (gt.hit && !sh.pass_through) {
+      ++both;
+      zerr += std::abs(top + sh.offset.z - gt.p[2]);
+      EXPECT_LT(sh.sn.x * d[0] + sh.sn.y * d[1] + sh.sn.z * d[2], 0.05) << "the hit faces the incoming ray";
+    }
+  }
+  EXPECT_GE(agree, n * 97 / 100);
+  EXPECT_LT(zerr / both, 0.02);
+}
+
+TEST(Shading, NoParallaxUsesTheHeightAtTheHit) {
+  KnitMaterialParams mp = flat_params();
+  mp.capm = false;
+  mp.ply_detail = false;
+  KnitMaterial m(stockinette(), mp);
+  KnitSurface s(stockinette(), StitchParams{});
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<float> U(0, 1);
+  for (int i = 0; i < 200; ++i) {
+    BaseHit bh;
+    bh.u = 40 * U(rng);
+    bh.v = 40 * U(rng);
+    const KnitShade sh = m.shade(bh, k::kv3_normalize(k::kv3(0.6f, 0.1f, -0.5f)), nullptr);
+    const SurfaceHit q = s.query(bh.u, bh.v);
+    ASSERT_EQ(sh.pass_through, !q.hit);
+    if (q.hit) {
+      EXPECT_NEAR(sh.offset.x, 0, 1e-5);
+      EXPECT_NEAR(sh.offset.y, 0, 1e-5);
+      EXPECT_NEAR(sh.sn.z, q.normal.z, 1e-4);
+    }
+  }
+}
+
+TEST(Shading, MultiScaleMixesColoursAndWidensRoughness) {
+  // Two-colour stripes: half the rows colour 0 (red), half colour 1 (blue).
+  Pattern stripes = Pattern::from_rows({{0}, {0}}, {{0}, {1}});
+  KnitMaterialParams mp = flat_params();
+  mp.mode = KnitMode::MultiScale;
+  mp.bsdf.reflect_colors = {Rgb{1, 0, 0}, Rgb{0, 0, 1}};
+  mp.bsdf.transmit_colors = mp.bsdf.reflect_colors;
+  KnitMaterial m(stripes, mp);
+  BaseHit bh;
+  bh.u = 50;
+  bh.v = 50;
+  bh.dudx = 30;
+  bh.dvdy = 30;
+  const KnitShade sh = m.shade(bh, k::kv3(0, 0, -1), nullptr, {0.3f, 0.7f});
+  ASSERT_FALSE(sh.pass_through);
+  EXPECT_GT(sh.point.p_delta, 0.05f);
+  EXPECT_LT(sh.point.p_delta, 0.4f);
+  EXPECT_NEAR(sh.kd_r.r, 0.5f, 0.15f);
+  EXPECT_NEAR(sh.kd_r.b, 0.5f, 0.15f);
+  EXPECT_NEAR(sh.kd_r.r + sh.kd_r.b, 1.0f, 1e-4f);
+  EXPECT_GT(sh.spec_r.alpha_x * sh.spec_r.alpha_y, mp.bsdf.roughness_x * mp.bsdf.roughness_y * 1.5f)
+      << "the footprint's normal spread must widen the specular lobe";
+  const float t = m.transmittance(bh, k::kv3(0, 0, -1), nullptr, {0.3f, 0.7f});
+  EXPECT_NEAR(t, sh.point.p_delta, 1e-6f);
+}
+
+TEST(Shading, StateIsSmall) {
+  Pattern big = Pattern::from_rows(std::vector<std::vector<int>>(48, std::vector<int>(48, 0)));
+  KnitMaterial m(big, flat_params());
+  // Pattern arrays (2 x 48 x 48 int32) + the 3 KiB ply table + parameters.
+  EXPECT_LT(m.state_bytes(), 32u * 1024u);
+  EXPECT_GT(m.state_bytes(), 2u * 48u * 48u * 4u);
+  std::printf("[ state ] 48x48 pattern: %zu bytes (ply table %zu)\n", m.state_bytes(), PlyProfile::table_bytes());
+}
+
+TEST(Shading, ParamsValidationNamesTheField) {
+  auto msg = [](KnitMaterialParams p) {
+    try {
+      p.validate();
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  KnitMaterialParams p;
+  p.uv_scale = -2;
+  EXPECT_NE(msg(p).find("KnitMaterialParams.uv_scale = -2"), std::string::npos);
+  p = {};
+  p.footprint_points = 0;
+  EXPECT_NE(msg(p).find("footprint_points = 0"), std::string::npos);
+  p = {};
+  p.stitch.a = NAN;
+  EXPECT_NE(msg(p).find("a must be finite"), std::string::npos);
+  // More colour indices in the pattern than colours given.
+  EXPECT_THROW(KnitMaterial(Pattern::from_rows({{0, 1}}, {{0, 1}}), KnitMaterialParams{}), std::invalid_argument);
+}
+
+}  // namespace
