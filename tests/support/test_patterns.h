@@ -31,13 +31,20 @@ struct NamedPattern {
   Pattern pattern;
 };
 
-// The ground-truth set.
-inline std::vector<NamedPattern> groundtruth_patterns() {
-  return {{"stockinette", stockinette()},
-          {"reverse_stockinette", reverse_stockinette()},
-          {"rib_1x1", rib_1x1()},
-          {"seed", seed()},
-          {"pyramid16", pyramid16()}};
+#ifdef KNIT_SOURCE_DIR
+// A shipped example pattern (examples/patterns/<name>.knit).
+inline Pattern example(const std::string& name) {
+  return Pattern::from_file(std::string(KNIT_SOURCE_DIR) + "/examples/patterns/" + name + ".knit");
 }
+
+// The ground-truth set: the shipped example files.
+inline std::vector<NamedPattern> groundtruth_patterns() {
+  return {{"stockinette", example("stockinette")},
+          {"reverse_stockinette", example("reverse_stockinette")},
+          {"rib_1x1", example("rib_1x1")},
+          {"seed", example("seed")},
+          {"pyramid16", example("pyramid")}};
+}
+#endif
 
 }  // namespace knit::test
