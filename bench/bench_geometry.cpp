@@ -176,6 +176,32 @@ void BM_BruteForceSampled(benchmark::State& state) {
 }
 BENCHMARK(BM_BruteForceSampled)->Arg(64)->Arg(256)->Arg(1024)->Arg(4096);
 
+// Multi-scale aggregation per shading point, by footprint points; footprint
+// of half a stitch (plain Sobol' placement) and of 4 stitches (cell-stratified,
+// the point count grows with the cells covered).
+void BM_Aggregate(benchmark::State& state) {
+  KnitSurface s(test::seed(), StitchParams{});
+  Pts p = random_points(s, 4096, 5);
+  const int npts = int(state.range(0));
+  const float size = float(state.range(1)) * 6.2832f / 2;
+  const k::kvec3 wi = k::kv3_normalize(k::kv3(0.3f, 0.2f, 0.93f));
+  size_t i = 0;
+  double used = 0;
+  for (auto _ : state) {
+    const k::KnitAggregate a =
+        k::knit_aggregate(s.geom(), s.codes(), s.colors(), p.x[i & 4095], p.y[i & 4095], k::kv3(size, 0, 0),
+                          k::kv3(0, size, 0), wi, npts, 0.3f, 0.6f, 0, 0, 6.2832f, 32);
+    used += a.points;
+    benchmark::DoNotOptimize(a);
+    ++i;
+  }
+  state.counters["points"] = used / double(state.iterations());
+  state.counters["ns/point"] =
+      benchmark::Counter(used, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.SetLabel(state.range(1) == 1 ? "half-stitch footprint" : "4-stitch footprint");
+}
+BENCHMARK(BM_Aggregate)->ArgsProduct({{4, 8, 16, 32}, {1, 8}});
+
 }  // namespace
 
 BENCHMARK_MAIN();

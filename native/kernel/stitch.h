@@ -59,10 +59,9 @@ KNIT_STRUCT(KnitGeom)
   int rows, cols;     /* pattern size */
   int has_floats;     /* pattern uses codes 2 or 3 */
   float quad_margin;  /* bound on |quadratic interpolant - curve| over a piece */
-  /* x, y bounds of the 8 pieces of a cell relative to (t0 of the piece, row
-   * centre), for any code (see knit_piece_bounds_xy); filled by knit_geom_make. */
-  float pxlo[8], pxhi[8], pylo[8], pyhi[8];
 KNIT_STRUCT_END(KnitGeom)
+/* KnitGeom is passed by value everywhere: keep it small (no arrays), or the
+ * C host spends its time copying it. */
 
 KNIT_FN KnitGeom knit_geom_make(float a, float h, float d, float r, int rows, int cols,
                                 int has_floats) {
@@ -84,32 +83,6 @@ KNIT_FN KnitGeom knit_geom_make(float a, float h, float d, float r, int rows, in
    * measures the real maximum against this bound. */
   g.quad_margin = KF(2.0) * (KF(0.0311) * (g.a + k_fabs(g.d)) + KF(0.0039) * g.h) +
                   KF(0.05) * (has_floats ? g.float_depth + g.h : KF(0.0));
-  {
-    /* Piece j covers tau in [j pi/4 - pi, (j+1) pi/4 - pi]; over it sin 2tau is
-     * a monotone quarter period between 0 and +-1, cos tau monotone between
-     * -cos(j pi/4) and -cos((j+1) pi/4). */
-    float sn[5], cs[9];
-    int j;
-    sn[0] = KF(0.0); sn[1] = KF(1.0); sn[2] = KF(0.0); sn[3] = KF(-1.0); sn[4] = KF(0.0);
-    cs[0] = KF(-1.0); cs[1] = KF(-0.70710678118654752440); cs[2] = KF(0.0);
-    cs[3] = KF(0.70710678118654752440); cs[4] = KF(1.0); cs[5] = KF(0.70710678118654752440);
-    cs[6] = KF(0.0); cs[7] = KF(-0.70710678118654752440); cs[8] = KF(-1.0);
-    for (j = 0; j < 8; j++) {
-      float sa = a * sn[j % 4], sb = a * sn[j % 4 + 1];
-      float ya = h * cs[j], yb = h * cs[j + 1];
-      float xlo = sa < sb ? sa : sb, xhi = sa > sb ? sa : sb;
-      float ylo = ya < yb ? ya : yb;
-      if (has_floats != 0) {
-        xlo = xlo < KF(0.0) ? xlo : KF(0.0);
-        xhi = xhi > KF(0.0) ? xhi : KF(0.0);
-        ylo = -h;
-      }
-      g.pxlo[j] = xlo;
-      g.pxhi[j] = K_PI_4 + xhi;
-      g.pylo[j] = ylo;
-      g.pyhi[j] = ya > yb ? ya : yb;
-    }
-  }
   return g;
 }
 
@@ -344,10 +317,23 @@ KNIT_FN KBox knit_profile_piece_bounds(KnitGeom g, int code, kvec3 sg, int j, fl
 KNIT_FN KBox knit_piece_bounds_xy(KnitGeom g, float yk, int gp) {
   KBox b;
   int j = gp & 7;
+  int q = j & 3;
   float t0 = KFLT(gp) * K_PI_4;
   float zmax = g.has_floats != 0 ? g.float_depth : k_fabs(g.d);
-  b.lo = kv3(t0 + g.pxlo[j], yk + g.pylo[j], -zmax);
-  b.hi = kv3(t0 + g.pxhi[j], yk + g.pyhi[j], zmax);
+  /* sin 2tau runs 0 -> 1 -> 0 -> -1 -> 0 over pieces q = 0..3 of a half
+   * period; cos tau between the values at the piece's ends. */
+  float slo = q == 3 ? KF(-1.0) : (q == 2 ? KF(-1.0) : KF(0.0));
+  float shi = q == 0 ? KF(1.0) : (q == 1 ? KF(1.0) : KF(0.0));
+  float ca = -knit_cos_pi8(2 * j), cb = -knit_cos_pi8(2 * j + 2);
+  float ylo = g.h * k_fmin(ca, cb), yhi = g.h * k_fmax(ca, cb);
+  float xlo = g.a * slo, xhi = g.a * shi;
+  if (g.has_floats != 0) {
+    xlo = k_fmin(xlo, KF(0.0));
+    xhi = k_fmax(xhi, KF(0.0));
+    ylo = -g.h;
+  }
+  b.lo = kv3(t0 + xlo, yk + ylo, -zmax);
+  b.hi = kv3(t0 + K_PI_4 + xhi, yk + yhi, zmax);
   return b;
 }
 
