@@ -1,5 +1,6 @@
 // Environment lights: uniform colour, and lat-long maps importance-sampled
 // by a 2D CDF over texels.
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -67,15 +68,25 @@ EnvironmentMapLight::EnvironmentMapLight(std::vector<Rgb> pixels, int width, int
 }
 
 void EnvironmentMapLight::build() {
+  // The radiance lookup is bilinear, so the value inside a texel's cell mixes
+  // its 3x3 neighbourhood. Sampling in proportion to the neighbourhood's
+  // maximum luminance keeps radiance / pdf bounded: no fireflies next to
+  // small bright features such as a sun.
   std::vector<float> f(pixels_.size());
   integral_lum_ = 0;
   for (int y = 0; y < height_; ++y) {
     const float st = std::sin(kPi * (static_cast<float>(y) + 0.5f) / static_cast<float>(height_));
     for (int x = 0; x < width_; ++x) {
       const size_t i = static_cast<size_t>(y) * width_ + x;
-      const float lum = std::max(0.0f, pixels_[i].luminance());
-      f[i] = lum * st;
-      integral_lum_ += static_cast<double>(lum) * st;
+      float lum_max = 0;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int yy = std::clamp(y + dy, 0, height_ - 1);
+          const int xx = ((x + dx) % width_ + width_) % width_;
+          lum_max = std::max(lum_max, pixels_[static_cast<size_t>(yy) * width_ + xx].luminance());
+        }
+      f[i] = lum_max * st;
+      integral_lum_ += static_cast<double>(std::max(0.0f, pixels_[i].luminance())) * st;
     }
   }
   integral_lum_ *= (2.0 * kPi / width_) * (kPi / height_) * strength_;
