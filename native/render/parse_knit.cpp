@@ -1,6 +1,7 @@
 // Scene file parser: the "knit" material (docs/scene-format.md#knit).
 // Rendering it is phase 2; parsing and validation are complete now.
 #include <algorithm>
+#include <cmath>
 
 #include "knit/pattern.h"
 #include "render/scene_parse_internal.h"
@@ -83,13 +84,20 @@ KnitDesc parse_knit_material(JsonObject& o, const std::string& dir) {
     pat.fail("must be a pattern file path or an array of rows, got " + pat.type_name());
   }
 
-  Range nz = Range::magnitude(1e3);
-  nz.nonzero = true;
-  k.a = o.number("a", Range::left_open(0, 1e3), k.a);
-  k.h = o.number("h", Range::left_open(0, 1e3), k.h);
-  k.d = o.number("d", nz, k.d);
-  k.r = o.number("r", Range::left_open(0, 1e3), k.r);
-  k.uv_scale = o.number("uv_scale", Range::left_open(0, 1e6));
+  // Two checks per parameter so the messages read "must be > 0, got -1".
+  auto param = [&](const char* key, const Range& sign, double max_abs, float def) {
+    auto n = o.get(key);
+    if (!n) return def;
+    const float v = n->number_f(sign);
+    if (std::fabs(v) > max_abs) n->fail("must be at most " + fmt_num(max_abs) + " in magnitude, got " + fmt_num(v));
+    return v;
+  };
+  k.a = param("a", Range::positive(), 1e3, k.a);
+  k.h = param("h", Range::positive(), 1e3, k.h);
+  k.d = param("d", Range::not_zero(), 1e3, k.d);
+  k.r = param("r", Range::positive(), 1e3, k.r);
+  if (!o.has("uv_scale")) o.fail("missing required key 'uv_scale'");
+  k.uv_scale = param("uv_scale", Range::positive(), 1e6, 0.0f);
 
   JsonNode yc = o.at("yarn_colors");
   for (const JsonNode& c : yc.elements(1, static_cast<size_t>(Pattern::kMaxColors)))
