@@ -94,6 +94,15 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
     }
 
     const Material& m = scene_.material(si.material);
+    // Where the interpolated normal puts the viewer on the other side than
+    // the geometry does (grazing views of smooth-shaded meshes), shade with
+    // the geometric normal: otherwise every sampled direction would be on
+    // the wrong side of the surface and the path would be lost.
+    if (dot(wo, si.shading.n) * dot(wo, si.ng) <= 0) {
+      const float sign = dot(si.shading.b, cross(si.shading.n, si.shading.t)) < 0 ? -1.0f : 1.0f;
+      si.shading = Frame::from_normal_tangent(si.ng, si.shading.t);
+      si.shading.b = si.shading.b * sign;
+    }
     const Vec3 wo_l = si.shading.to_local(wo);
 
     if (m.can_pass_through()) {
