@@ -19,7 +19,9 @@ struct BakeResult {
   size_t covered = 0;    // texels whose centre lies inside a UV triangle
 };
 
-// Channel layout: N.X N.Y N.Z T.X T.Y T.Z B.sign A (A: 1 covered, 0.5 dilated, 0 empty).
+// Channels (EXR keeps them sorted by name; read them by name): N.X N.Y N.Z
+// (normal) T.X T.Y T.Z (tangent along +u) B.sign (+1 when cross(N, T) points
+// along +v) A (1 covered, 0.5 dilated, 0 empty).
 BakeResult bake_frames(const TriangleMesh& mesh, const std::string& path, const BakeSettings& settings);
 
 }  // namespace knit::render

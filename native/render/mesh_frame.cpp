@@ -56,15 +56,26 @@ std::unique_ptr<MeshFrame> MeshFrame::from_baked(const std::string& path, float 
   auto in = OIIO::ImageInput::open(path);
   if (!in) throw std::runtime_error(path + ": cannot read frame image: " + OIIO::geterror());
   const OIIO::ImageSpec& spec = in->spec();
+  // EXR stores channels sorted by name; find ours by name.
   const char* expected[8] = {"N.X", "N.Y", "N.Z", "T.X", "T.Y", "T.Z", "B.sign", "A"};
   if (spec.nchannels != 8) throw std::runtime_error(path + ": not a baked frame image (need 8 channels)");
-  for (int c = 0; c < 8; ++c)
-    if (spec.channel_name(c) != expected[c])
-      throw std::runtime_error(path + ": not a baked frame image (channel " + std::to_string(c) + " is '" +
-                               std::string(spec.channel_name(c)) + "', expected '" + expected[c] + "')");
-  const OIIO::ParamValue* lo = spec.find_attribute("knitshade:uv_min", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 2));
-  const OIIO::ParamValue* hi = spec.find_attribute("knitshade:uv_max", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 2));
-  if (!lo || !hi) throw std::runtime_error(path + ": missing knitshade:uv_min / knitshade:uv_max metadata");
+  int index[8];
+  for (int c = 0; c < 8; ++c) {
+    index[c] = -1;
+    for (int k = 0; k < 8; ++k)
+      if (spec.channel_name(k) == expected[c]) index[c] = k;
+    if (index[c] < 0)
+      throw std::runtime_error(path + ": not a baked frame image (no channel '" + expected[c] + "')");
+  }
+  // Two floats; EXR may hand them back as a float[2] or as a V2f.
+  auto two_floats = [&](const char* name) {
+    const OIIO::ParamValue* p = spec.find_attribute(name);
+    if (!p || p->type().basetype != OIIO::TypeDesc::FLOAT || p->type().basevalues() != 2)
+      throw std::runtime_error(path + ": missing or malformed " + name + " metadata");
+    return p;
+  };
+  const OIIO::ParamValue* lo = two_floats("knitshade:uv_min");
+  const OIIO::ParamValue* hi = two_floats("knitshade:uv_max");
   auto baked = std::make_unique<Baked>();
   baked->width = spec.width;
   baked->height = spec.height;
@@ -74,9 +85,13 @@ std::unique_ptr<MeshFrame> MeshFrame::from_baked(const std::string& path, float 
   baked->uv_max = {phi[0], phi[1]};
   if (!(baked->uv_max.x > baked->uv_min.x) || !(baked->uv_max.y > baked->uv_min.y))
     throw std::runtime_error(path + ": empty UV rectangle in the metadata");
-  baked->data.resize(static_cast<size_t>(spec.width) * spec.height * 8);
-  if (!in->read_image(0, 0, 0, 8, OIIO::TypeDesc::FLOAT, baked->data.data()))
+  const size_t texels = static_cast<size_t>(spec.width) * spec.height;
+  std::vector<float> raw(texels * 8);
+  if (!in->read_image(0, 0, 0, 8, OIIO::TypeDesc::FLOAT, raw.data()))
     throw std::runtime_error(path + ": cannot read frame image: " + in->geterror());
+  baked->data.resize(texels * 8);
+  for (size_t i = 0; i < texels; ++i)
+    for (int c = 0; c < 8; ++c) baked->data[i * 8 + c] = raw[i * 8 + index[c]];
   for (float v : baked->data)
     if (!std::isfinite(v)) throw std::runtime_error(path + ": the frame image holds non-finite values");
   std::unique_ptr<MeshFrame> f(new MeshFrame());
