@@ -135,7 +135,8 @@ class EnvironmentMapLight final : public Light {
   double integral_lum_ = 0;  // integral of luminance over the sphere
 };
 
-// Picks one light per shading point in proportion to its power.
+// Picks one light per shading point: half in proportion to its power, half
+// uniformly (lights without power are never picked).
 class LightSampler {
  public:
   LightSampler() = default;
