@@ -47,9 +47,9 @@ def main():
     azim = math.radians(float(sys.argv[4]) if len(sys.argv) > 4 else 40.0)
     height = width // 2
     sun = (math.cos(elev) * math.sin(azim), math.sin(elev), -math.cos(elev) * math.cos(azim))
-    sun_radius = math.radians(2.5)
+    sun_radius = math.radians(4.0)
     sun_cos = math.cos(sun_radius)
-    sun_radiance = 400.0
+    sun_radiance = 160.0
     with open(out, "wb") as f:
         f.write(b"#?RADIANCE\n# procedural sky from scripts/make_envmap.py\nFORMAT=32-bit_rle_rgbe\n\n")
         f.write(f"-Y {height} +X {width}\n".encode("ascii"))
