@@ -54,7 +54,11 @@ EnvironmentMapLight::EnvironmentMapLight(const LightDesc& d, const std::string& 
   }
   cos_rot_ = std::cos(radians(d.rotation));
   sin_rot_ = std::sin(radians(d.rotation));
-  build();
+  try {
+    build();
+  } catch (const std::exception& e) {
+    throw SceneError(scene_file, d.path + ".file", d.file + ": " + e.what());
+  }
 }
 
 EnvironmentMapLight::EnvironmentMapLight(std::vector<Rgb> pixels, int width, int height, float strength,

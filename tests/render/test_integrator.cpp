@@ -324,5 +324,31 @@ TEST(PassThrough, GreySheetAttenuatesTwice) {
   }
 }
 
+// Radiance that overflows float (a finite but enormous environment times its
+// strength) must not reach the image: such samples are dropped, counted and
+// located, and every pixel stays finite.
+TEST(InvalidSamples, AreCountedAndNeverReachTheImage) {
+  const std::string dir = test::test_dir();
+  RgbImage env(8, 4);
+  for (Rgb& p : env.pixels) p = Rgb(0.5f);
+  env.at(5, 1) = Rgb(1e38f);
+  write_float_image(dir + "/env.exr", env);
+  const std::string scene = R"({
+    "film": {"width": 16, "height": 16, "spp": 8, "seed": 1},
+    "camera": {"position": [0, 2, 3], "look_at": [0, 0, 0], "fov": 40},
+    "lights": [{"type": "environment", "file": ")" + dir + R"(/env.exr", "strength": 1000}],
+    "materials": {"m": {"type": "diffuse", "albedo": [0.5, 0.5, 0.5]}},
+    "objects": [{"mesh": ")" + mesh("ground.obj") + R"(", "material": "m"}]
+  })";
+  const auto r = test::render_text(dir, scene);
+  EXPECT_GT(r.result.stats.invalid_samples, 0u);
+  EXPECT_GE(r.result.invalid_x, 0);
+  EXPECT_GE(r.result.invalid_sample, 0);
+  for (const Rgb& p : r.image.pixels) {
+    ASSERT_TRUE(p.is_finite());
+    ASSERT_FALSE(p.has_negative());
+  }
+}
+
 }  // namespace
 }  // namespace knit::render
