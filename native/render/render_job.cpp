@@ -1,6 +1,7 @@
 #include "render/render_job.h"
 
 #include <chrono>
+#include <filesystem>
 #include <fstream>
 
 #include "knit/version.h"
@@ -18,10 +19,18 @@ double since(std::chrono::steady_clock::time_point t) {
 
 RenderJobResult run_render_job(const RenderJob& job, const std::function<void(const std::string&)>& warn) {
   const auto t_start = std::chrono::steady_clock::now();
-  // Fail on a bad output name or display before spending time on rendering.
+  // Fail on a bad output name, folder or display before spending time on rendering.
+  auto check_folder = [](const std::string& file, const char* what) {
+    const std::filesystem::path parent = std::filesystem::path(file).parent_path();
+    std::error_code ec;
+    if (!parent.empty() && !std::filesystem::is_directory(parent, ec))
+      throw std::runtime_error(file + ": the " + std::string(what) + " folder " + parent.string() + " does not exist");
+  };
   if (!job.output_file.empty()) {
     if (output_format_for(job.output_file) == OutputFormat::Png) DisplayTransform check(job.display);
+    check_folder(job.output_file, "output");
   }
+  if (!job.report_file.empty()) check_folder(job.report_file, "report");
 
   SceneDesc desc = load_scene_file(job.scene_file);
   const double parse_seconds = since(t_start);

@@ -128,6 +128,9 @@ TEST(Cli, UsageErrorsExitWith2AndBadOutputFailsBeforeRendering) {
   const CliRun jpg = run(dir, "render " + scene + " -o " + dir + "/out.jpg");
   EXPECT_EQ(jpg.code, 1);
   EXPECT_NE(jpg.err.find("unsupported output format '.jpg' (use .exr or .png)"), std::string::npos) << jpg.err;
+  const CliRun folder = run(dir, "render " + scene + " -o " + dir + "/no/such/folder/out.exr");
+  EXPECT_EQ(folder.code, 1);
+  EXPECT_NE(folder.err.find("the output folder " + dir + "/no/such/folder does not exist"), std::string::npos) << folder.err;
   const CliRun view = run(dir, "render " + scene + " -o " + dir + "/out.png --view NoSuchView");
   EXPECT_EQ(view.code, 1);
   EXPECT_NE(view.err.find("unknown view 'NoSuchView'"), std::string::npos) << view.err;
