@@ -9,13 +9,12 @@
 #include <memory>
 #include <vector>
 
+#include "knit/frame.h"
 #include "knit/kernel.h"
 #include "knit/params.h"
 #include "knit/pattern.h"
 
 namespace knit {
-
-using Vec3 = k::kvec3;
 
 // One crossing of a line with one yarn tube.
 struct TubeCrossing {
@@ -38,17 +37,7 @@ struct SurfaceHit {
   int steps = 0;     // CAPM segments marched
 };
 
-// Base-mesh frame at a pattern-space point, for CAPM's ray bending. The
-// frame's axes are world directions: t along +x (u), b along +y (v), n the
-// surface normal; an orthonormal frame is expected.
-class FrameProvider {
- public:
-  virtual ~FrameProvider() = default;
-  virtual void frame(float x, float y, Vec3& t, Vec3& b, Vec3& n) const = 0;
-  // Normal curvature along x and y (1/pattern units, > 0 convex) for CAPM's
-  // metric correction; {0, 0, 0} when unknown.
-  virtual Vec3 curvature(float /*x*/, float /*y*/) const { return {0, 0, 0}; }
-};
+// FrameProvider (base-mesh frame at a pattern-space point) is in knit/frame.h.
 
 class FlatFrame final : public FrameProvider {
  public:

@@ -1,0 +1,27 @@
+// FrameProvider: the base-mesh frame at a pattern-space point, for CAPM's ray
+// bending. Split out of surface.h so that hosts (the renderer's MeshFrame) can
+// implement it without depending on the KnitSurface implementation.
+//
+// Pattern space (docs/geometry.md): x along the course, y along the wale, z out
+// of the fabric, in stitch-curve units. UV maps to pattern space by
+// x = uv_scale * u, y = uv_scale * v.
+#pragma once
+
+#include "knit/kernel.h"
+
+namespace knit {
+
+using Vec3 = k::kvec3;
+
+// The frame's axes are world directions: t along +x (u), b along +y (v), n the
+// surface normal; an orthonormal frame is expected.
+class FrameProvider {
+ public:
+  virtual ~FrameProvider() = default;
+  virtual void frame(float x, float y, Vec3& t, Vec3& b, Vec3& n) const = 0;
+  // Normal curvature along x and y (1/pattern units, > 0 convex) for CAPM's
+  // metric correction and segment length; {0, 0, 0} when unknown.
+  virtual Vec3 curvature(float /*x*/, float /*y*/) const { return {0, 0, 0}; }
+};
+
+}  // namespace knit

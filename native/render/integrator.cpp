@@ -1,0 +1,191 @@
+#include "render/integrator.h"
+
+#include <cmath>
+#include <limits>
+
+#include "render/differentials.h"
+#include "render/sampling.h"
+
+namespace knit::render {
+
+Vec3 offset_ray_origin(Vec3 p, Vec3 ng, Vec3 d) {
+  const float eps = 1e-5f * (1.0f + max_abs_component(p));
+  return p + ng * (dot(d, ng) >= 0 ? eps : -eps);
+}
+
+namespace {
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+struct PathState {
+  bool specular = true;  // no non-delta scattering yet since the last counted emission
+  float bsdf_pdf = 0;    // density of the last BSDF sample
+  Vec3 prev_p;           // last scattering vertex
+};
+}  // namespace
+
+Rgb PathIntegrator::shadow_transmittance(Vec3 origin, Vec3 dir, float tmax, PathStats& stats) const {
+  if (!scene_.has_pass_through()) {
+    ++stats.shadow_rays;
+    Ray r;
+    r.o = origin;
+    r.d = dir;
+    r.tmax = tmax;
+    return scene_.accel().occluded(r) ? Rgb() : Rgb(1.0f);
+  }
+  const bool finite = std::isfinite(tmax);
+  const Vec3 end = finite ? origin + dir * tmax : Vec3();
+  Rgb tr(1.0f);
+  RayDifferential r;
+  r.o = origin;
+  r.d = dir;
+  r.tmax = tmax;
+  for (int crossing = 0; crossing <= kMaxPassThrough; ++crossing) {
+    ++stats.shadow_rays;
+    SurfaceInteraction si;
+    if (!scene_.accel().intersect(r, si)) return tr;
+    if (si.light >= 0) return {};
+    const Material& m = scene_.material(si.material);
+    if (!m.can_pass_through()) return {};
+    tr *= m.transmittance(si, si.shading.to_local(dir));
+    if (tr.is_black()) return {};
+    r.o = offset_ray_origin(si.p, si.ng, dir);
+    if (finite) {
+      r.tmax = dot(end - r.o, dir);
+      if (!(r.tmax > 0)) return tr;
+    }
+  }
+  ++stats.pass_limit;
+  return {};
+}
+
+Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) const {
+  const Strategy strategy = settings_.strategy;
+  const LightSampler& lights = scene_.light_sampler();
+  Rgb radiance, beta(1.0f);
+  PathState state;
+  state.prev_p = ray.o;
+  int depth = 0, passes = 0;
+  ++stats.camera_rays;
+
+  // MIS weight of emission found by a BSDF-sampled ray (light `index`, seen
+  // along `dir` from the last scattering vertex, at `hit` or escaping).
+  auto emission_weight = [&](int index, Vec3 dir, const SurfaceInteraction* hit) -> float {
+    if (state.specular || strategy == Strategy::Bsdf) return 1.0f;
+    if (strategy == Strategy::Nee) return 0.0f;
+    const float light_pdf = scene_.light(index).pdf(state.prev_p, dir, hit) *
+                            lights.probability(static_cast<size_t>(index));
+    return power_heuristic(state.bsdf_pdf, light_pdf);
+  };
+
+  for (;;) {
+    SurfaceInteraction si;
+    if (!scene_.accel().intersect(ray, si)) {
+      if (const Light* env = scene_.environment()) {
+        const Rgb le = env->environment(ray.d);
+        if (!le.is_black()) radiance += beta * le * emission_weight(scene_.environment_index(), ray.d, nullptr);
+      }
+      break;
+    }
+    const Vec3 wo = -ray.d;
+    if (si.light >= 0) {
+      const Rgb le = scene_.light(si.light).emitted(si, wo);
+      if (!le.is_black()) radiance += beta * le * emission_weight(si.light, ray.d, &si);
+      break;  // emitters absorb
+    }
+
+    const Material& m = scene_.material(si.material);
+    // Where the interpolated normal puts the viewer on the other side than
+    // the geometry does (grazing views of smooth-shaded meshes), shade with
+    // the geometric normal: otherwise every sampled direction would be on
+    // the wrong side of the surface and the path would be lost.
+    if (dot(wo, si.shading.n) * dot(wo, si.ng) <= 0) {
+      const float sign = dot(si.shading.b, cross(si.shading.n, si.shading.t)) < 0 ? -1.0f : 1.0f;
+      si.shading = Frame::from_normal_tangent(si.ng, si.shading.t);
+      si.shading.b = si.shading.b * sign;
+    }
+    const Vec3 wo_l = si.shading.to_local(wo);
+
+    if (m.can_pass_through()) {
+      const PassThrough pt = m.pass_through(si, wo_l, sampler.get1d());
+      beta *= pt.weight;
+      if (pt.pass) {
+        if (++passes > kMaxPassThrough) {
+          ++stats.pass_limit;
+          break;
+        }
+        RayDifferential next;
+        next.o = offset_ray_origin(si.p, si.ng, ray.d);
+        next.d = ray.d;
+        differentials_pass_through(ray, si, next);
+        ray = next;
+        ++stats.bounce_rays;
+        continue;  // not a bounce
+      }
+    }
+    if (depth >= settings_.max_depth) break;
+
+    // Next-event estimation.
+    if (strategy != Strategy::Bsdf && m.has_smooth_lobes() && !lights.empty()) {
+      float sel = 0;
+      size_t index = 0;
+      const Light* light = lights.pick(sampler.get1d(), sel, index);
+      const Vec2 ul = sampler.get2d();
+      LightSample ls;
+      if (light && light->sample(si.p, ul, ls) && ls.pdf > 0 && !ls.li.is_black()) {
+        const Vec3 wi_l = si.shading.to_local(ls.wi);
+        const Rgb f = m.eval(si, wo_l, wi_l);
+        const bool geo_reflect = dot(ls.wi, si.ng) * dot(wo, si.ng) > 0;
+        const bool sh_reflect = wi_l.z * wo_l.z > 0;
+        if (!f.is_black() && geo_reflect == sh_reflect) {
+          const Vec3 origin = offset_ray_origin(si.p, si.ng, ls.wi);
+          Vec3 dir = ls.wi;
+          float tmax = kInf;
+          if (!ls.infinite) {
+            const Vec3 to = ls.p - origin;
+            const float dist = length(to);
+            dir = to / dist;
+            tmax = dist * (1.0f - 1e-4f) - 1e-5f * (1.0f + max_abs_component(ls.p));
+          }
+          if (tmax > 0) {
+            const Rgb tr = shadow_transmittance(origin, dir, tmax, stats);
+            if (!tr.is_black()) {
+              float w = 1.0f;
+              if (!ls.delta && strategy == Strategy::Mis)
+                w = power_heuristic(sel * ls.pdf, m.pdf(si, wo_l, wi_l));
+              radiance += beta * f * tr * ls.li * (std::fabs(wi_l.z) * w / (sel * ls.pdf));
+            }
+          }
+        }
+      }
+    }
+
+    // BSDF sampling.
+    const float uc = sampler.get1d();
+    const Vec2 ub = sampler.get2d();
+    BsdfSample bs;
+    if (!m.sample(si, wo_l, uc, ub, bs) || !(bs.pdf > 0) || bs.weight.is_black()) break;
+    const Vec3 wi = si.shading.to_world(bs.wi);
+    const bool geo_reflect = dot(wi, si.ng) * dot(wo, si.ng) > 0;
+    const bool lobe_reflect = (bs.flags & kReflection) != 0;
+    if (geo_reflect != lobe_reflect) break;  // shading normal and geometry disagree: absorbed
+    beta *= bs.weight;
+    state.specular = bs.is_delta();
+    state.bsdf_pdf = bs.pdf;
+    state.prev_p = si.p;
+    ++depth;
+    if (depth >= settings_.rr_depth) {
+      const float q = std::min(0.95f, beta.max());
+      if (!(q > 0) || sampler.get1d() >= q) break;
+      beta = beta / q;
+    }
+    RayDifferential next;
+    next.o = offset_ray_origin(si.p, si.ng, wi);
+    next.d = wi;
+    if (bs.is_delta()) differentials_specular(ray, si, bs, next);
+    ray = next;
+    ++stats.bounce_rays;
+  }
+  return radiance;
+}
+
+}  // namespace knit::render

@@ -1,0 +1,60 @@
+// Unidirectional path tracer with next-event estimation and multiple
+// importance sampling (power heuristic) between light sampling and BSDF
+// sampling, Russian roulette, pass-through surfaces and ray differentials.
+// See docs/renderer.md#integrator.
+#pragma once
+
+#include <cstdint>
+
+#include "render/rng.h"
+#include "render/scene.h"
+
+namespace knit::render {
+
+// Counters of one thread's work; summed after rendering (sums are exact, so
+// the totals do not depend on the thread count either).
+struct PathStats {
+  uint64_t camera_rays = 0;
+  uint64_t bounce_rays = 0;     // continuation rays, pass-through continuations included
+  uint64_t shadow_rays = 0;     // NEE visibility rays (each surface crossing counts one)
+  uint64_t invalid_samples = 0; // NaN, Inf or negative radiance; dropped and reported
+  uint64_t pass_limit = 0;      // paths stopped by the pass-through safety limit
+
+  void add(const PathStats& o) {
+    camera_rays += o.camera_rays;
+    bounce_rays += o.bounce_rays;
+    shadow_rays += o.shadow_rays;
+    invalid_samples += o.invalid_samples;
+    pass_limit += o.pass_limit;
+  }
+  uint64_t total_rays() const { return camera_rays + bounce_rays + shadow_rays; }
+};
+
+class PathIntegrator {
+ public:
+  // Straight-through crossings of one path (or one shadow ray) beyond which it
+  // is stopped and counted in PathStats::pass_limit.
+  static constexpr int kMaxPassThrough = 256;
+
+  PathIntegrator(const Scene& scene, const IntegratorDesc& settings)
+      : scene_(scene), settings_(settings) {}
+
+  // Radiance arriving along the camera ray (counted as a camera ray).
+  Rgb li(RayDifferential ray, Sampler& sampler, PathStats& stats) const;
+
+  // Transmittance from `origin` along unit `dir` up to `tmax` (inf for
+  // infinite lights): 0 when blocked, the product of pass-through
+  // transmittances otherwise.
+  Rgb shadow_transmittance(Vec3 origin, Vec3 dir, float tmax, PathStats& stats) const;
+
+ private:
+  const Scene& scene_;
+  IntegratorDesc settings_;
+};
+
+// Origin for a ray leaving the surface point `p` (geometric normal `ng`) in
+// direction `d`: offset along the normal to the side `d` goes, scaled with
+// the magnitude of p to stay clear of the surface's rounding error.
+Vec3 offset_ray_origin(Vec3 p, Vec3 ng, Vec3 d);
+
+}  // namespace knit::render

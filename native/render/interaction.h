@@ -1,0 +1,31 @@
+// What the integrator and the materials know about a ray-surface hit.
+#pragma once
+
+#include "render/vec.h"
+
+namespace knit::render {
+
+// Screen-space footprint of a hit (ray differentials, Igehy 1999): how the
+// hit point, the UVs and the shading normal change from one pixel to the
+// next. Valid on camera paths until the first non-specular bounce.
+struct Footprint {
+  bool valid = false;
+  Vec3 dpdx, dpdy;
+  float dudx = 0, dvdx = 0, dudy = 0, dvdy = 0;
+  Vec3 dndx, dndy;
+};
+
+struct SurfaceInteraction {
+  Vec3 p;        // hit point (interpolated on the primitive, not o + t d)
+  Vec3 ng;       // unit geometric normal, in the hemisphere of the shading normal
+  Frame shading; // n: shading normal; t along +u, b along +v when the mesh has UVs
+  Vec2 uv;       // texture coordinates (barycentrics when the mesh has none)
+  bool has_uv = false;
+  float t = 0;   // ray distance
+  Footprint footprint;
+  unsigned geom_id = 0, prim_id = 0;
+  int material = -1;  // index into the scene's materials, -1 for lights
+  int light = -1;     // index into the scene's lights when the surface emits
+};
+
+}  // namespace knit::render

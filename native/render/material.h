@@ -1,0 +1,65 @@
+// The material contract. Directions are in the local shading frame (z the
+// shading normal, x along +u, y along +v); wo points away from the surface
+// toward where the light goes (the viewer), wi toward where it comes from.
+//
+//   eval(wo, wi)          f(wo, wi) without the cosine; 0 for delta lobes
+//   pdf(wo, wi)           solid-angle density of sample(); 0 for delta lobes
+//   sample(wo, uc, u)     -> {wi, weight = f |cos wi| / pdf, pdf, flags}
+//
+// Pass-through (for the knit model's CAPM misses and delta transmission): before
+// shading, pass_through() may decide that the ray continues straight on
+// unchanged with a weight; that is not a bounce. When it does not pass, its
+// weight (e.g. 1 / (1 - P)) multiplies the path throughput before shading.
+// Shadow rays crossing the surface are attenuated by transmittance(w), which
+// must equal the expected pass-through weight so NEE and BSDF paths agree.
+#pragma once
+
+#include <cstdint>
+
+#include "render/interaction.h"
+#include "render/vec.h"
+
+namespace knit::render {
+
+enum BsdfFlags : uint32_t {
+  kReflection = 1u << 0,
+  kTransmission = 1u << 1,
+  kDiffuse = 1u << 2,
+  kGlossy = 1u << 3,
+  kSpecular = 1u << 4,  // a delta lobe: eval and pdf are zero, only sample() reaches it
+};
+
+struct BsdfSample {
+  Vec3 wi;
+  Rgb weight;        // f |cos| / pdf (delta lobes: the lobe's share over its probability)
+  float pdf = 0;     // solid angle; for delta lobes the discrete probability of the lobe
+  uint32_t flags = 0;
+  float eta = 1;     // relative IOR crossed by a transmission (for ray differentials)
+  bool is_delta() const { return (flags & kSpecular) != 0; }
+};
+
+struct PassThrough {
+  bool pass = false;
+  Rgb weight{1.0f};
+};
+
+class Material {
+ public:
+  virtual ~Material() = default;
+  virtual const char* kind() const = 0;
+
+  // Stochastic pass-through decision with the uniform number u.
+  virtual PassThrough pass_through(const SurfaceInteraction&, Vec3 /*wo*/, float /*u*/) const { return {}; }
+  // Straight-through transmittance for a shadow ray crossing along w.
+  virtual Rgb transmittance(const SurfaceInteraction&, Vec3 /*w*/) const { return {}; }
+  // True when pass_through() or transmittance() can be non-zero.
+  virtual bool can_pass_through() const { return false; }
+  // False when every lobe is delta: next-event estimation is skipped.
+  virtual bool has_smooth_lobes() const = 0;
+
+  virtual Rgb eval(const SurfaceInteraction& si, Vec3 wo, Vec3 wi) const = 0;
+  virtual float pdf(const SurfaceInteraction& si, Vec3 wo, Vec3 wi) const = 0;
+  virtual bool sample(const SurfaceInteraction& si, Vec3 wo, float uc, Vec2 u, BsdfSample& s) const = 0;
+};
+
+}  // namespace knit::render

@@ -1,0 +1,163 @@
+#include "render/mesh_frame.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace knit::render {
+
+namespace OIIO = OIIO_NAMESPACE;
+
+struct MeshFrame::Baked {
+  int width = 0, height = 0;
+  Vec2 uv_min, uv_max;
+  std::vector<float> data;  // 8 channels per texel
+  const float* texel(int x, int y) const { return &data[(static_cast<size_t>(y) * width + x) * 8]; }
+};
+
+Frame interpolate_frame(const TriangleMesh& m, size_t tri, float b1, float b2) {
+  const uint32_t i0 = m.indices[3 * tri], i1 = m.indices[3 * tri + 1], i2 = m.indices[3 * tri + 2];
+  const float b0 = 1 - b1 - b2;
+  Vec3 n = m.normals[i0] * b0 + m.normals[i1] * b1 + m.normals[i2] * b2;
+  const float l = length(n);
+  if (!(l > 1e-20f)) {
+    n = normalize(cross(m.positions[i1] - m.positions[i0], m.positions[i2] - m.positions[i0]));
+  } else {
+    n = n / l;
+  }
+  Frame f;
+  if (m.has_uvs() && !m.tangents.empty()) {
+    const Vec3 t = m.tangents[i0] * b0 + m.tangents[i1] * b1 + m.tangents[i2] * b2;
+    f = Frame::from_normal_tangent(n, t);
+    const float s = m.tangent_sign[i0] * b0 + m.tangent_sign[i1] * b1 + m.tangent_sign[i2] * b2;
+    if (s < 0) f.b = -f.b;
+  } else {
+    f = Frame::from_normal(n);
+  }
+  return f;
+}
+
+MeshFrame::MeshFrame(std::shared_ptr<const TriangleMesh> mesh, float uv_scale)
+    : mesh_(std::move(mesh)), uv_scale_(uv_scale) {
+  if (!(uv_scale > 0) || !std::isfinite(uv_scale))
+    throw std::invalid_argument("MeshFrame: uv_scale must be finite and > 0");
+  if (!mesh_->has_uvs()) throw std::invalid_argument(mesh_->file + ": MeshFrame needs a mesh with UVs");
+  grid_ = std::make_unique<UvTriangleGrid>(*mesh_);
+  if (grid_->num_triangles() == 0)
+    throw std::invalid_argument(mesh_->file + ": no triangle has a non-zero UV area");
+}
+
+MeshFrame::~MeshFrame() = default;
+
+std::unique_ptr<MeshFrame> MeshFrame::from_baked(const std::string& path, float uv_scale) {
+  if (!(uv_scale > 0) || !std::isfinite(uv_scale))
+    throw std::invalid_argument("MeshFrame: uv_scale must be finite and > 0");
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) throw std::runtime_error(path + ": cannot read frame image: " + OIIO::geterror());
+  const OIIO::ImageSpec& spec = in->spec();
+  // EXR stores channels sorted by name; find ours by name.
+  const char* expected[8] = {"N.X", "N.Y", "N.Z", "T.X", "T.Y", "T.Z", "B.sign", "A"};
+  if (spec.nchannels != 8) throw std::runtime_error(path + ": not a baked frame image (need 8 channels)");
+  int index[8];
+  for (int c = 0; c < 8; ++c) {
+    index[c] = -1;
+    for (int k = 0; k < 8; ++k)
+      if (spec.channel_name(k) == expected[c]) index[c] = k;
+    if (index[c] < 0)
+      throw std::runtime_error(path + ": not a baked frame image (no channel '" + expected[c] + "')");
+  }
+  // Two floats; EXR may hand them back as a float[2] or as a V2f.
+  auto two_floats = [&](const char* name) {
+    const OIIO::ParamValue* p = spec.find_attribute(name);
+    if (!p || p->type().basetype != OIIO::TypeDesc::FLOAT || p->type().basevalues() != 2)
+      throw std::runtime_error(path + ": missing or malformed " + name + " metadata");
+    return p;
+  };
+  const OIIO::ParamValue* lo = two_floats("knitshade:uv_min");
+  const OIIO::ParamValue* hi = two_floats("knitshade:uv_max");
+  auto baked = std::make_unique<Baked>();
+  baked->width = spec.width;
+  baked->height = spec.height;
+  const float* plo = static_cast<const float*>(lo->data());
+  const float* phi = static_cast<const float*>(hi->data());
+  baked->uv_min = {plo[0], plo[1]};
+  baked->uv_max = {phi[0], phi[1]};
+  if (!(baked->uv_max.x > baked->uv_min.x) || !(baked->uv_max.y > baked->uv_min.y))
+    throw std::runtime_error(path + ": empty UV rectangle in the metadata");
+  const size_t texels = static_cast<size_t>(spec.width) * spec.height;
+  std::vector<float> raw(texels * 8);
+  if (!in->read_image(0, 0, 0, 8, OIIO::TypeDesc::FLOAT, raw.data()))
+    throw std::runtime_error(path + ": cannot read frame image: " + in->geterror());
+  baked->data.resize(texels * 8);
+  for (size_t i = 0; i < texels; ++i)
+    for (int c = 0; c < 8; ++c) baked->data[i * 8 + c] = raw[i * 8 + index[c]];
+  for (float v : baked->data)
+    if (!std::isfinite(v)) throw std::runtime_error(path + ": the frame image holds non-finite values");
+  std::unique_ptr<MeshFrame> f(new MeshFrame());
+  f->baked_ = std::move(baked);
+  f->uv_scale_ = uv_scale;
+  return f;
+}
+
+bool MeshFrame::lookup(Vec2 uv, Frame& f) const {
+  if (mesh_) {
+    float b1 = 0, b2 = 0;
+    int64_t tri = grid_->locate(uv, b1, b2);
+    const bool inside = tri >= 0;
+    if (!inside) tri = grid_->nearest(uv, b1, b2);
+    f = interpolate_frame(*mesh_, static_cast<size_t>(tri), b1, b2);
+    return inside;
+  }
+  const Baked& bk = *baked_;
+  const float fx = (uv.x - bk.uv_min.x) / (bk.uv_max.x - bk.uv_min.x) * static_cast<float>(bk.width) - 0.5f;
+  const float fy = (bk.uv_max.y - uv.y) / (bk.uv_max.y - bk.uv_min.y) * static_cast<float>(bk.height) - 0.5f;
+  const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
+  const float tx = fx - static_cast<float>(x0), ty = fy - static_cast<float>(y0);
+  Vec3 n(0, 0, 0), t(0, 0, 0);
+  float sign = 0, wsum = 0;
+  for (int k = 0; k < 4; ++k) {
+    const int x = std::clamp(x0 + (k & 1), 0, bk.width - 1), y = std::clamp(y0 + (k >> 1), 0, bk.height - 1);
+    const float w = ((k & 1) ? tx : 1 - tx) * ((k >> 1) ? ty : 1 - ty);
+    const float* p = bk.texel(x, y);
+    if (!(p[7] > 0) || !(w > 0)) continue;
+    n += Vec3(p[0], p[1], p[2]) * w;
+    t += Vec3(p[3], p[4], p[5]) * w;
+    sign += p[6] * w;
+    wsum += w;
+  }
+  bool ok = wsum > 0;
+  if (!ok) {
+    // Outside every chart: the nearest covered texel, searched in rings.
+    const int cx = std::clamp(static_cast<int>(std::lround(fx)), 0, bk.width - 1);
+    const int cy = std::clamp(static_cast<int>(std::lround(fy)), 0, bk.height - 1);
+    const int rmax = std::max(bk.width, bk.height);
+    for (int r = 1; r <= rmax && !(wsum > 0); ++r)
+      for (int y = cy - r; y <= cy + r && !(wsum > 0); ++y)
+        for (int x = cx - r; x <= cx + r; ++x) {
+          if (x < 0 || y < 0 || x >= bk.width || y >= bk.height) continue;
+          if (std::max(std::abs(x - cx), std::abs(y - cy)) != r) continue;
+          const float* p = bk.texel(x, y);
+          if (!(p[7] > 0)) continue;
+          n = {p[0], p[1], p[2]};
+          t = {p[3], p[4], p[5]};
+          sign = p[6];
+          wsum = 1;
+          break;
+        }
+  }
+  if (!(length(n) > 1e-20f)) n = {0, 0, 1};
+  f = Frame::from_normal_tangent(normalize(n), t);
+  if (sign < 0) f.b = -f.b;
+  return ok;
+}
+
+void MeshFrame::frame(float x, float y, knit::Vec3& t, knit::Vec3& b, knit::Vec3& n) const {
+  Frame f;
+  lookup({x / uv_scale_, y / uv_scale_}, f);
+  t = knit::k::kv3(f.t.x, f.t.y, f.t.z);
+  b = knit::k::kv3(f.b.x, f.b.y, f.b.z);
+  n = knit::k::kv3(f.n.x, f.n.y, f.n.z);
+}
+
+}  // namespace knit::render

@@ -1,0 +1,101 @@
+#include "render/render_job.h"
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+
+#include "knit/version.h"
+#include "render/output.h"
+#include "render/renderer.h"
+#include "render/scene.h"
+
+namespace knit::render {
+
+namespace {
+double since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+}  // namespace
+
+RenderJobResult run_render_job(const RenderJob& job, const std::function<void(const std::string&)>& warn) {
+  const auto t_start = std::chrono::steady_clock::now();
+  // Fail on a bad output name, folder or display before spending time on rendering.
+  auto check_folder = [](const std::string& file, const char* what) {
+    const std::filesystem::path parent = std::filesystem::path(file).parent_path();
+    std::error_code ec;
+    if (!parent.empty() && !std::filesystem::is_directory(parent, ec))
+      throw std::runtime_error(file + ": the " + std::string(what) + " folder " + parent.string() + " does not exist");
+  };
+  if (!job.output_file.empty()) {
+    if (output_format_for(job.output_file) == OutputFormat::Png) DisplayTransform check(job.display);
+    check_folder(job.output_file, "output");
+  }
+  if (!job.report_file.empty()) check_folder(job.report_file, "report");
+
+  SceneDesc desc = load_scene_file(job.scene_file);
+  const double parse_seconds = since(t_start);
+  Warnings warnings = desc.warnings;
+  if (job.spp) desc.film.spp = *job.spp;
+  if (job.seed) desc.film.seed = *job.seed;
+
+  BuildOptions options;
+  options.knit_preview_diffuse = job.knit_preview_diffuse;
+  const Scene scene(desc, options, warnings);
+  if (warn)
+    for (const std::string& w : warnings.messages) warn(w);
+
+  RenderSettings settings;
+  settings.spp = desc.film.spp;
+  settings.seed = desc.film.seed;
+  settings.threads = job.threads;
+  settings.progress = job.progress;
+  RenderResult r = render_image(scene, settings);
+  if (r.stats.invalid_samples > 0 && warn)
+    warn(std::to_string(r.stats.invalid_samples) + " invalid (NaN, Inf or negative) radiance samples were dropped; first at pixel (" +
+         std::to_string(r.invalid_x) + ", " + std::to_string(r.invalid_y) + "), sample " + std::to_string(r.invalid_sample));
+  if (r.stats.pass_limit > 0 && warn)
+    warn(std::to_string(r.stats.pass_limit) + " paths were stopped after " +
+         std::to_string(PathIntegrator::kMaxPassThrough) + " pass-through crossings");
+
+  const auto t_write = std::chrono::steady_clock::now();
+  if (!job.output_file.empty()) write_output(job.output_file, r.image, desc.film.exposure, job.display);
+  const double write_seconds = since(t_write);
+
+  RenderJobResult out;
+  RenderReport& rep = out.report;
+  rep.scene = job.scene_file;
+  rep.output = job.output_file;
+  rep.version = knit::version();
+  rep.width = desc.film.width;
+  rep.height = desc.film.height;
+  rep.spp = desc.film.spp;
+  rep.seed = desc.film.seed;
+  rep.threads = r.threads;
+  rep.parse_seconds = parse_seconds;
+  rep.load_seconds = scene.stats().load_seconds;
+  rep.build_seconds = scene.stats().build_seconds;
+  rep.render_seconds = r.seconds;
+  rep.write_seconds = write_seconds;
+  rep.samples = r.samples;
+  rep.camera_rays = r.stats.camera_rays;
+  rep.bounce_rays = r.stats.bounce_rays;
+  rep.shadow_rays = r.stats.shadow_rays;
+  rep.invalid_samples = r.stats.invalid_samples;
+  rep.pass_limit = r.stats.pass_limit;
+  rep.triangles = scene.stats().triangles;
+  rep.mesh_bytes = scene.stats().mesh_bytes;
+  rep.embree_bytes = scene.accel().embree_bytes();
+  rep.embree_peak_bytes = scene.accel().embree_peak_bytes();
+  rep.peak_rss_bytes = peak_rss_bytes();
+  rep.total_seconds = since(t_start);
+  if (!job.report_file.empty()) {
+    std::ofstream f(job.report_file);
+    if (!f) throw std::runtime_error(job.report_file + ": cannot write the report");
+    f << rep.to_json();
+    if (!f) throw std::runtime_error(job.report_file + ": cannot write the report");
+  }
+  out.image = std::move(r.image);
+  return out;
+}
+
+}  // namespace knit::render

@@ -1,0 +1,37 @@
+// One `knitshade render` run as a library call: parse, build, render, write,
+// report. The CLI (native/cli/cmd_render.cpp) only parses arguments.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+
+#include "render/display.h"
+#include "render/image.h"
+#include "render/progress.h"
+#include "render/report.h"
+
+namespace knit::render {
+
+struct RenderJob {
+  std::string scene_file;
+  std::string output_file;  // .exr or .png; empty: do not write
+  std::string report_file;  // JSON report; empty: none
+  std::optional<int> spp;   // override film.spp
+  std::optional<uint64_t> seed;
+  int threads = 0;
+  ProgressMode progress = ProgressMode::Quiet;
+  bool knit_preview_diffuse = false;
+  DisplaySettings display;
+};
+
+struct RenderJobResult {
+  RgbImage image;  // linear, before exposure
+  RenderReport report;
+};
+
+// Throws SceneError / std::runtime_error with one clear message. `warn`
+// receives each warning as it is found (loading, invalid samples).
+RenderJobResult run_render_job(const RenderJob& job, const std::function<void(const std::string&)>& warn = {});
+
+}  // namespace knit::render

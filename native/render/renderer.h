@@ -1,0 +1,36 @@
+// Renders a Scene into a float image: tiles in parallel with TBB, one
+// independent random stream per (seed, pixel, sample), so the image is a pure
+// function of (scene, spp, seed) whatever the number of threads.
+#pragma once
+
+#include <cstdint>
+
+#include "render/image.h"
+#include "render/integrator.h"
+#include "render/progress.h"
+#include "render/scene.h"
+
+namespace knit::render {
+
+struct RenderSettings {
+  int spp = 16;
+  uint64_t seed = 0;
+  int threads = 0;  // 0: every hardware thread
+  ProgressMode progress = ProgressMode::Quiet;
+  int tile_size = 16;
+};
+
+struct RenderResult {
+  RgbImage image;       // linear radiance, exposure not applied
+  PathStats stats;
+  double seconds = 0;   // wall time of the pixel loop
+  int threads = 0;      // threads actually allowed
+  uint64_t samples = 0; // width * height * spp
+  // First invalid (NaN/Inf/negative) sample, for the message: pixel and sample index.
+  int invalid_x = -1, invalid_y = -1;
+  int64_t invalid_sample = -1;
+};
+
+RenderResult render_image(const Scene& scene, const RenderSettings& settings);
+
+}  // namespace knit::render

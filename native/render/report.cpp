@@ -1,0 +1,93 @@
+#include "render/report.h"
+
+#include <sys/resource.h>
+
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+namespace knit::render {
+
+int64_t peak_rss_bytes() {
+  struct rusage ru {};
+  if (getrusage(RUSAGE_SELF, &ru) != 0) return -1;
+  return static_cast<int64_t>(ru.ru_maxrss) * 1024;  // Linux reports KiB
+}
+
+std::string format_bytes(double b) {
+  const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB"};
+  int u = 0;
+  while (b >= 1024.0 && u < 4) {
+    b /= 1024.0;
+    ++u;
+  }
+  char buf[32];
+  std::snprintf(buf, sizeof buf, u == 0 ? "%.0f %s" : "%.1f %s", b, units[u]);
+  return buf;
+}
+
+static std::string si_rate(double v) {
+  char buf[32];
+  if (v >= 1e9) std::snprintf(buf, sizeof buf, "%.2f G", v / 1e9);
+  else if (v >= 1e6) std::snprintf(buf, sizeof buf, "%.2f M", v / 1e6);
+  else if (v >= 1e3) std::snprintf(buf, sizeof buf, "%.2f k", v / 1e3);
+  else std::snprintf(buf, sizeof buf, "%.0f ", v);
+  return buf;
+}
+
+std::string RenderReport::to_text() const {
+  char buf[1024];
+  std::string s;
+  std::snprintf(buf, sizeof buf, "rendered %s: %dx%d, %d spp, %d threads\n", scene.c_str(), width, height, spp, threads);
+  s += buf;
+  std::snprintf(buf, sizeof buf,
+                "  wall time   %.2f s (parse %.2f, load %.2f, BVH %.2f, render %.2f, write %.2f)\n", total_seconds,
+                parse_seconds, load_seconds, build_seconds, render_seconds, write_seconds);
+  s += buf;
+  std::snprintf(buf, sizeof buf, "  samples     %llu, %ssamples/s\n", static_cast<unsigned long long>(samples),
+                si_rate(samples_per_second()).c_str());
+  s += buf;
+  std::snprintf(buf, sizeof buf, "  rays        %llu (camera %llu, bounce %llu, shadow %llu), %srays/s\n",
+                static_cast<unsigned long long>(total_rays()), static_cast<unsigned long long>(camera_rays),
+                static_cast<unsigned long long>(bounce_rays), static_cast<unsigned long long>(shadow_rays),
+                si_rate(rays_per_second()).c_str());
+  s += buf;
+  std::snprintf(buf, sizeof buf, "  memory      peak RSS %s, Embree BVH %s (peak %s), meshes %s, %zu triangles\n",
+                format_bytes(static_cast<double>(peak_rss_bytes)).c_str(),
+                format_bytes(static_cast<double>(embree_bytes)).c_str(),
+                format_bytes(static_cast<double>(embree_peak_bytes)).c_str(),
+                format_bytes(static_cast<double>(mesh_bytes)).c_str(), triangles);
+  s += buf;
+  if (invalid_samples > 0 || pass_limit > 0) {
+    std::snprintf(buf, sizeof buf, "  problems    %llu invalid (NaN/Inf/negative) samples dropped, %llu paths hit the pass-through limit\n",
+                  static_cast<unsigned long long>(invalid_samples), static_cast<unsigned long long>(pass_limit));
+    s += buf;
+  }
+  s += "  output      " + output + "\n";
+  return s;
+}
+
+std::string RenderReport::to_json() const {
+  nlohmann::ordered_json j;
+  j["knitshade_version"] = version;
+  j["scene"] = scene;
+  j["output"] = output;
+  j["width"] = width;
+  j["height"] = height;
+  j["spp"] = spp;
+  j["seed"] = seed;
+  j["threads"] = threads;
+  j["seconds"] = {{"parse", parse_seconds}, {"load", load_seconds}, {"build", build_seconds},
+                  {"render", render_seconds}, {"write", write_seconds}, {"total", total_seconds}};
+  j["samples"] = samples;
+  j["samples_per_second"] = samples_per_second();
+  j["rays"] = {{"camera", camera_rays}, {"bounce", bounce_rays}, {"shadow", shadow_rays}, {"total", total_rays()}};
+  j["rays_per_second"] = rays_per_second();
+  j["invalid_samples"] = invalid_samples;
+  j["pass_through_limit_hits"] = pass_limit;
+  j["triangles"] = triangles;
+  j["memory_bytes"] = {{"peak_rss", peak_rss_bytes}, {"embree", embree_bytes}, {"embree_peak", embree_peak_bytes},
+                       {"meshes", mesh_bytes}};
+  return j.dump(2) + "\n";
+}
+
+}  // namespace knit::render

@@ -1,0 +1,37 @@
+// The render report: timings, throughput, memory. Printed at the end of
+// `knitshade render` and written as JSON with --report for benchmarks.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace knit::render {
+
+struct RenderReport {
+  std::string scene, output, version;
+  int width = 0, height = 0, spp = 0, threads = 0;
+  uint64_t seed = 0;
+  double parse_seconds = 0, load_seconds = 0, build_seconds = 0, render_seconds = 0, write_seconds = 0,
+         total_seconds = 0;
+  uint64_t samples = 0;
+  uint64_t camera_rays = 0, bounce_rays = 0, shadow_rays = 0;
+  uint64_t invalid_samples = 0, pass_limit = 0;
+  size_t triangles = 0, mesh_bytes = 0;
+  int64_t embree_bytes = 0, embree_peak_bytes = 0;
+  int64_t peak_rss_bytes = 0;
+
+  uint64_t total_rays() const { return camera_rays + bounce_rays + shadow_rays; }
+  double samples_per_second() const { return render_seconds > 0 ? samples / render_seconds : 0; }
+  double rays_per_second() const { return render_seconds > 0 ? total_rays() / render_seconds : 0; }
+
+  std::string to_text() const;  // a few human-readable lines
+  std::string to_json() const;  // one JSON object (docs/renderer.md#report)
+};
+
+// Peak resident set size of this process so far (getrusage), in bytes.
+int64_t peak_rss_bytes();
+
+// "12.3 MiB" style.
+std::string format_bytes(double bytes);
+
+}  // namespace knit::render

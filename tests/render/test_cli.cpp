@@ -1,0 +1,158 @@
+// The `knitshade render` and `knitshade bake-frames` commands, run as a
+// user would: exit codes, the one-line errors, outputs and the JSON report.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "render_test_util.h"
+
+namespace knit::render {
+namespace {
+
+struct CliRun {
+  int code = -1;
+  std::string out, err;
+};
+
+CliRun run(const std::string& dir, const std::string& args) {
+  const std::string cmd = std::string(KNIT_CLI) + " " + args + " > " + dir + "/stdout.txt 2> " + dir + "/stderr.txt";
+  const int status = std::system(cmd.c_str());
+  CliRun r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = test::read_file(dir + "/stdout.txt");
+  r.err = test::read_file(dir + "/stderr.txt");
+  return r;
+}
+
+int lines(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+std::string small_scene(const std::string& material = R"({"type": "diffuse", "albedo": [0.6, 0.5, 0.4]})") {
+  return R"({
+    "film": {"width": 24, "height": 16, "spp": 4, "seed": 1},
+    "camera": {"position": [0, 1, 3], "look_at": [0, 0, 0], "fov": 40},
+    "lights": [{"type": "environment", "color": [0.8, 0.9, 1.0]}, {"type": "directional", "to_light": [1, 2, 1], "irradiance": [2, 2, 2]}],
+    "materials": {"m": )" + material + R"(},
+    "objects": [{"mesh": ")" + test::mesh("quad.obj") + R"(", "material": "m", "transform": {"rotate": [-60, 0, 0], "scale": 2}}]
+  })";
+}
+
+TEST(Cli, RendersPngAndExrWithAReport) {
+  const std::string dir = test::test_dir();
+  const std::string scene = test::write_file(dir, "scene.json", small_scene());
+  const CliRun r = run(dir, "render " + scene + " -o " + dir + "/out.png --report " + dir + "/report.json --threads 2");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("samples/s"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("Embree BVH"), std::string::npos);
+  auto png = OIIO::ImageInput::open(dir + "/out.png");
+  ASSERT_TRUE(png);
+  EXPECT_EQ(png->spec().width, 24);
+  EXPECT_EQ(png->spec().format, OIIO::TypeDesc::UINT8);
+
+  const nlohmann::json rep = nlohmann::json::parse(test::read_file(dir + "/report.json"));
+  EXPECT_EQ(rep["width"], 24);
+  EXPECT_EQ(rep["spp"], 4);
+  EXPECT_EQ(rep["threads"], 2);
+  EXPECT_EQ(rep["samples"], 24 * 16 * 4);
+  EXPECT_GT(rep["samples_per_second"].get<double>(), 0);
+  EXPECT_GT(rep["rays_per_second"].get<double>(), 0);
+  EXPECT_GT(rep["memory_bytes"]["peak_rss"].get<int64_t>(), 0);
+  EXPECT_GT(rep["memory_bytes"]["embree"].get<int64_t>(), 0);
+  EXPECT_EQ(rep["rays"]["camera"], 24 * 16 * 4);
+  EXPECT_EQ(rep["invalid_samples"], 0);
+
+  const CliRun e = run(dir, "render " + scene + " -o " + dir + "/out.exr --quiet --spp 2 --seed 9");
+  ASSERT_EQ(e.code, 0) << e.err;
+  EXPECT_EQ(e.out, "");  // --quiet
+  const RgbImage exr = read_rgb_image(dir + "/out.exr");
+  EXPECT_EQ(exr.width, 24);
+}
+
+TEST(Cli, BadSceneGivesOneLineAndExitCode1) {
+  const std::string dir = test::test_dir();
+  std::string text = small_scene();
+  text.replace(text.find("\"width\": 24"), 11, "\"width\": -24");
+  const std::string scene = test::write_file(dir, "scene.json", text);
+  const CliRun r = run(dir, "render " + scene + " -o " + dir + "/out.png");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("knitshade render: error: " + scene + ": film.width: must be in [1, 16384], got -24"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/out.png"));
+
+  const CliRun missing = run(dir, "render " + dir + "/none.json -o " + dir + "/out.png");
+  EXPECT_EQ(missing.code, 1);
+  EXPECT_EQ(lines(missing.err), 1);
+  EXPECT_NE(missing.err.find("none.json: scene file not found"), std::string::npos) << missing.err;
+
+  test::write_file(dir, "syntax.json", "{\"film\": }");
+  const CliRun syntax = run(dir, "render " + dir + "/syntax.json -o " + dir + "/out.png");
+  EXPECT_EQ(syntax.code, 1);
+  EXPECT_NE(syntax.err.find("syntax.json:1:10: JSON syntax error"), std::string::npos) << syntax.err;
+}
+
+TEST(Cli, KnitNeedsThePreviewFlag) {
+  const std::string dir = test::test_dir();
+  const std::string scene = test::write_file(
+      dir, "scene.json",
+      small_scene(R"({"type": "knit", "pattern": ["KP", "PK"], "uv_scale": 12, "yarn_colors": [[0.7, 0.1, 0.1]]})"));
+  const CliRun r = run(dir, "render " + scene + " -o " + dir + "/knit.png --quiet");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("materials.m: rendering the knit material is not implemented yet"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/knit.png"));
+
+  const CliRun p = run(dir, "render " + scene + " -o " + dir + "/knit.exr --quiet --knit-preview-diffuse");
+  ASSERT_EQ(p.code, 0) << p.err;
+  const RgbImage img = read_rgb_image(dir + "/knit.exr");
+  const Rgb c = img.at(12, 8);
+  EXPECT_GT(c.r, 2 * c.g);  // the red base colour
+}
+
+TEST(Cli, UsageErrorsExitWith2AndBadOutputFailsBeforeRendering) {
+  const std::string dir = test::test_dir();
+  const std::string scene = test::write_file(dir, "scene.json", small_scene());
+  EXPECT_EQ(run(dir, "render " + scene).code, 2);                        // no -o
+  EXPECT_EQ(run(dir, "render -o x.png").code, 2);                        // no scene
+  EXPECT_EQ(run(dir, "render " + scene + " -o x.png --spp zero").code, 2);
+  EXPECT_EQ(run(dir, "render " + scene + " -o x.png --frobnicate").code, 2);
+  const CliRun jpg = run(dir, "render " + scene + " -o " + dir + "/out.jpg");
+  EXPECT_EQ(jpg.code, 1);
+  EXPECT_NE(jpg.err.find("unsupported output format '.jpg' (use .exr or .png)"), std::string::npos) << jpg.err;
+  const CliRun folder = run(dir, "render " + scene + " -o " + dir + "/no/such/folder/out.exr");
+  EXPECT_EQ(folder.code, 1);
+  EXPECT_NE(folder.err.find("the output folder " + dir + "/no/such/folder does not exist"), std::string::npos) << folder.err;
+  const CliRun view = run(dir, "render " + scene + " -o " + dir + "/out.png --view NoSuchView");
+  EXPECT_EQ(view.code, 1);
+  EXPECT_NE(view.err.find("unknown view 'NoSuchView'"), std::string::npos) << view.err;
+  EXPECT_EQ(run(dir, "render --help").code, 0);
+}
+
+TEST(Cli, BakeFrames) {
+  const std::string dir = test::test_dir();
+  const CliRun r = run(dir, "bake-frames " + test::mesh("half_cylinder.obj") + " -o " + dir + "/frames.exr --size 64x16");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("baked 64x16 frames"), std::string::npos) << r.out;
+  auto in = OIIO::ImageInput::open(dir + "/frames.exr");
+  ASSERT_TRUE(in);
+  EXPECT_EQ(in->spec().nchannels, 8);
+  EXPECT_EQ(in->spec().width, 64);
+
+  const std::string no_uv = test::write_file(dir, "n.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  const CliRun bad = run(dir, "bake-frames " + no_uv + " -o " + dir + "/n.exr");
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_EQ(lines(bad.err), 1);
+  EXPECT_NE(bad.err.find("n.obj: the mesh has no UV coordinates"), std::string::npos) << bad.err;
+}
+
+}  // namespace
+}  // namespace knit::render

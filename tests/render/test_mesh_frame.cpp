@@ -1,0 +1,181 @@
+// MeshFrame (knit::FrameProvider over a mesh): exact lookups through the UV
+// grid, lookups in a baked frame image, and the bake itself.
+#include <gtest/gtest.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include <cmath>
+#include <set>
+#include <string>
+
+#include "render/frame_bake.h"
+#include "render/mesh_frame.h"
+#include "render_test_util.h"
+
+namespace knit::render {
+namespace {
+
+constexpr float kPiF = 3.14159265358979f;
+
+Vec3 v3(knit::Vec3 k) { return {k.x, k.y, k.z}; }
+
+void expect_orthonormal(Vec3 t, Vec3 b, Vec3 n) {
+  EXPECT_NEAR(length(t), 1.0f, 1e-5f);
+  EXPECT_NEAR(length(b), 1.0f, 1e-5f);
+  EXPECT_NEAR(length(n), 1.0f, 1e-5f);
+  EXPECT_NEAR(dot(t, b), 0.0f, 1e-5f);
+  EXPECT_NEAR(dot(t, n), 0.0f, 1e-5f);
+  EXPECT_NEAR(dot(b, n), 0.0f, 1e-5f);
+}
+
+// Expected frame of the unit half cylinder at u = pi s: n = (-cos, 0, sin),
+// t = dP/du = (sin, 0, cos), b = +y.
+void half_cylinder_frame(float u, Vec3& t, Vec3& b, Vec3& n) {
+  const float a = u;  // radius 1: angle = arc length
+  n = {-std::cos(a), 0, std::sin(a)};
+  t = {std::sin(a), 0, std::cos(a)};
+  b = {0, 1, 0};
+}
+
+TEST(MeshFrame, FlatQuadIsTheIdentityFrame) {
+  auto quad = std::make_shared<const TriangleMesh>(load_mesh(test::mesh("quad.obj")));
+  const MeshFrame f(quad, 8.0f);
+  for (float x : {0.5f, 2.0f, 7.9f})
+    for (float y : {0.1f, 4.0f, 7.5f}) {
+      knit::Vec3 t, b, n;
+      f.frame(x, y, t, b, n);
+      EXPECT_NEAR(v3(t).x, 1.0f, 1e-6f);
+      EXPECT_NEAR(v3(b).y, 1.0f, 1e-6f);
+      EXPECT_NEAR(v3(n).z, 1.0f, 1e-6f);
+    }
+}
+
+TEST(MeshFrame, HalfCylinderMatchesTheAnalyticFrame) {
+  auto mesh = std::make_shared<const TriangleMesh>(load_mesh(test::mesh("half_cylinder.obj")));
+  const float uv_scale = 20.0f;
+  const MeshFrame f(mesh, uv_scale);
+  float worst = 0;
+  for (int i = 1; i < 40; ++i)
+    for (int j = 1; j < 5; ++j) {
+      const float u = kPiF * i / 40.0f + 0.003f, v = 2.0f * j / 5.0f;
+      knit::Vec3 t, b, n;
+      f.frame(uv_scale * u, uv_scale * v, t, b, n);
+      Vec3 et, eb, en;
+      half_cylinder_frame(u, et, eb, en);
+      expect_orthonormal(v3(t), v3(b), v3(n));
+      worst = std::max({worst, length(v3(t) - et), length(v3(b) - eb), length(v3(n) - en)});
+    }
+  // 96 segments around the half circle: smooth normals interpolate within a
+  // small fraction of the 1.9 degree facet angle.
+  EXPECT_LT(worst, 2e-3f);
+}
+
+TEST(MeshFrame, OutsideTheUvChartsUsesTheNearestTriangle) {
+  auto mesh = std::make_shared<const TriangleMesh>(load_mesh(test::mesh("half_cylinder.obj")));
+  const MeshFrame f(mesh, 1.0f);
+  Frame fr;
+  EXPECT_TRUE(f.lookup({1.0f, 1.0f}, fr));
+  EXPECT_FALSE(f.lookup({-0.5f, 1.0f}, fr));  // left of u = 0: the frame at u = 0
+  EXPECT_NEAR(fr.n.x, -1.0f, 1e-3f);
+  EXPECT_FALSE(f.lookup({kPiF + 0.3f, 2.5f}, fr));  // beyond the far corner
+  EXPECT_NEAR(fr.n.x, 1.0f, 1e-3f);
+}
+
+TEST(MeshFrame, MirroredUvsGiveABitangentAlongPlusV) {
+  const std::string dir = test::test_dir();
+  const std::string obj = test::write_file(dir, "mirror.obj",
+                                           "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 1 0\nvt 0 0\nvt 0 1\nvt 1 1\n"
+                                           "vn 0 0 1\nf 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n");
+  auto mesh = std::make_shared<const TriangleMesh>(load_mesh(obj));
+  const MeshFrame f(mesh, 1.0f);
+  knit::Vec3 t, b, n;
+  f.frame(0.3f, 0.6f, t, b, n);
+  EXPECT_NEAR(v3(t).x, -1.0f, 1e-6f);  // +u runs toward -x
+  EXPECT_NEAR(v3(b).y, 1.0f, 1e-6f);   // +v runs toward +y
+  EXPECT_NEAR(v3(n).z, 1.0f, 1e-6f);
+}
+
+TEST(MeshFrame, RejectsMeshesWithoutUvsAndBadScales) {
+  const std::string dir = test::test_dir();
+  auto no_uv = std::make_shared<const TriangleMesh>(
+      load_mesh(test::write_file(dir, "n.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")));
+  EXPECT_THROW(MeshFrame(no_uv, 1.0f), std::invalid_argument);
+  auto quad = std::make_shared<const TriangleMesh>(load_mesh(test::mesh("quad.obj")));
+  EXPECT_THROW(MeshFrame(quad, 0.0f), std::invalid_argument);
+  EXPECT_THROW(MeshFrame(quad, NAN), std::invalid_argument);
+}
+
+TEST(BakeFrames, BakedLookupsAgreeWithExactOnes) {
+  const std::string dir = test::test_dir();
+  const TriangleMesh m = load_mesh(test::mesh("half_cylinder.obj"));
+  BakeSettings s;
+  s.width = 256;
+  s.height = 64;
+  const BakeResult r = bake_frames(m, dir + "/frames.exr", s);
+  EXPECT_NEAR(r.uv_min.x, 0.0f, 1e-6f);
+  EXPECT_NEAR(r.uv_max.x, kPiF, 1e-5f);
+  EXPECT_NEAR(r.uv_max.y, 2.0f, 1e-6f);
+  EXPECT_EQ(r.covered, static_cast<size_t>(256 * 64));  // the chart fills its rectangle
+
+  auto in = OIIO::ImageInput::open(dir + "/frames.exr");
+  ASSERT_TRUE(in);
+  EXPECT_EQ(in->spec().nchannels, 8);
+  std::set<std::string> names;
+  for (int c = 0; c < 8; ++c) names.insert(in->spec().channel_name(c));
+  EXPECT_EQ(names, (std::set<std::string>{"A", "B.sign", "N.X", "N.Y", "N.Z", "T.X", "T.Y", "T.Z"}));
+  in.reset();
+
+  auto exact_mesh = std::make_shared<const TriangleMesh>(m);
+  const MeshFrame exact(exact_mesh, 10.0f);
+  const auto baked = MeshFrame::from_baked(dir + "/frames.exr", 10.0f);
+  ASSERT_TRUE(baked->is_baked());
+  float worst = 0;
+  for (int i = 0; i < 50; ++i) {
+    const float u = 0.05f + (kPiF - 0.1f) * i / 49.0f, v = 0.1f + 1.8f * ((i * 7) % 50) / 49.0f;
+    Frame a, b;
+    EXPECT_TRUE(exact.lookup({u, v}, a));
+    EXPECT_TRUE(baked->lookup({u, v}, b));
+    worst = std::max({worst, length(a.n - b.n), length(a.t - b.t), length(a.b - b.b)});
+    knit::Vec3 t, bb, n;
+    baked->frame(10.0f * u, 10.0f * v, t, bb, n);
+    expect_orthonormal(v3(t), v3(bb), v3(n));
+  }
+  // Bilinear interpolation of 256 texels over a half circle: about 1e-4 error.
+  EXPECT_LT(worst, 1e-3f);
+}
+
+TEST(BakeFrames, UncoveredTexelsAreMarkedAndDilated) {
+  const std::string dir = test::test_dir();
+  // A single triangle covers half of its UV rectangle.
+  const std::string obj = test::write_file(dir, "tri.obj",
+                                           "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\n"
+                                           "f 1/1/1 2/2/1 3/3/1\n");
+  BakeSettings s;
+  s.width = s.height = 16;
+  s.dilate = 1;
+  const BakeResult r = bake_frames(load_mesh(obj), dir + "/tri.exr", s);
+  EXPECT_GT(r.covered, 100u);
+  EXPECT_LT(r.covered, 140u);
+  auto in = OIIO::ImageInput::open(dir + "/tri.exr");
+  ASSERT_TRUE(in);
+  std::vector<float> px(16 * 16 * 8);
+  ASSERT_TRUE(in->read_image(0, 0, 0, 8, OIIO::TypeDesc::FLOAT, px.data()));
+  int alpha = -1;
+  for (int c = 0; c < 8; ++c)
+    if (in->spec().channel_name(c) == "A") alpha = c;
+  ASSERT_GE(alpha, 0);
+  int covered = 0, dilated = 0, empty = 0;
+  for (int i = 0; i < 256; ++i) {
+    const float a = px[i * 8 + alpha];
+    covered += a == 1.0f;
+    dilated += a == 0.5f;
+    empty += a == 0.0f;
+  }
+  EXPECT_EQ(static_cast<size_t>(covered), r.covered);
+  EXPECT_GT(dilated, 10);
+  EXPECT_GT(empty, 50);
+  EXPECT_THROW(bake_frames(load_mesh(obj), dir + "/tri.png", s), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace knit::render

@@ -1,0 +1,365 @@
+// Scene file parsing and validation: every error class, each message naming
+// the file and the JSON path of the field at fault.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "render/scene.h"
+#include "render/scene_desc.h"
+#include "render_test_util.h"
+
+namespace knit::render {
+namespace {
+
+using nlohmann::json;
+using test::scene_error_of;
+
+json base_scene() {
+  return json::parse(R"({
+    "film": {"width": 8, "height": 6, "spp": 2, "seed": 3},
+    "camera": {"position": [0, 1, 5], "look_at": [0, 0, 0], "fov": 40},
+    "lights": [{"type": "point", "position": [0, 4, 0], "intensity": [10, 10, 10]}],
+    "materials": {
+      "red": {"type": "diffuse", "albedo": [0.8, 0.1, 0.1]},
+      "wool": {"type": "knit", "pattern": ["KKPP", "PPKK"], "uv_scale": 10,
+               "yarn_colors": [[0.8, 0.2, 0.2]]}
+    },
+    "objects": [{"mesh": "MESH", "material": "red"}]
+  })");
+}
+
+std::string with_mesh(json j, const std::string& mesh) {
+  for (auto& o : j["objects"]) o["mesh"] = mesh;
+  return j.dump(2);
+}
+
+SceneDesc parse(const json& j) { return parse_scene(with_mesh(j, test::mesh("quad.obj")), "scene.json", "."); }
+
+std::string error_of(const json& j) {
+  return scene_error_of([&] { parse(j); });
+}
+
+std::string error_of_text(const std::string& text) {
+  return scene_error_of([&] { parse_scene(text, "scene.json", "."); });
+}
+
+TEST(SceneParse, ValidSceneParses) {
+  const SceneDesc d = parse(base_scene());
+  EXPECT_EQ(d.film.width, 8);
+  EXPECT_EQ(d.film.height, 6);
+  EXPECT_EQ(d.film.spp, 2);
+  EXPECT_EQ(d.film.seed, 3u);
+  ASSERT_EQ(d.materials.size(), 2u);
+  ASSERT_EQ(d.objects.size(), 1u);
+  EXPECT_EQ(d.materials[static_cast<size_t>(d.objects[0].material)].name, "red");
+  const MaterialDesc& wool = d.materials[1];
+  ASSERT_EQ(wool.type, MaterialType::Knit);
+  EXPECT_EQ(wool.knit.rows, 2);
+  EXPECT_EQ(wool.knit.cols, 4);
+  EXPECT_EQ(wool.knit.codes, (std::vector<int32_t>{0, 0, 1, 1, 1, 1, 0, 0}));
+  EXPECT_FLOAT_EQ(wool.knit.uv_scale, 10.0f);
+}
+
+TEST(SceneParse, SyntaxErrorGivesLineAndColumn) {
+  const std::string msg = error_of_text("{\n  \"film\": {\"width\": 8,\n  }\n}");
+  EXPECT_NE(msg.find("scene.json:3:3:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("syntax error"), std::string::npos) << msg;
+}
+
+TEST(SceneParse, NumberOverflowIsLocated) {
+  const std::string msg = error_of_text("{\n \"film\": {\"width\": 1e999}}");
+  EXPECT_NE(msg.find("scene.json:2:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("overflow"), std::string::npos) << msg;
+}
+
+TEST(SceneParse, NanLiteralIsASyntaxError) {
+  const std::string msg = error_of_text("{\"film\": {\"width\": NaN}}");
+  EXPECT_NE(msg.find("scene.json:1:"), std::string::npos) << msg;
+}
+
+TEST(SceneParse, DuplicateKeyNamesTheObject) {
+  const std::string msg = error_of_text(R"({"film": {"width": 8, "width": 9}})");
+  EXPECT_NE(msg.find("scene.json: film: duplicate key 'width'"), std::string::npos) << msg;
+}
+
+TEST(SceneParse, UnknownKeysAreErrors) {
+  json j = base_scene();
+  j["film"]["widht"] = 8;
+  EXPECT_NE(error_of(j).find("scene.json: film.widht: unknown key 'widht'"), std::string::npos) << error_of(j);
+  j = base_scene();
+  j["materials"]["wool"]["colour"] = 1;
+  EXPECT_NE(error_of(j).find("scene.json: materials.wool.colour: unknown key"), std::string::npos);
+  j = base_scene();
+  j["lights"][0]["color"] = {1, 1, 1};
+  EXPECT_NE(error_of(j).find("scene.json: lights[0].color: unknown key"), std::string::npos);
+  j = base_scene();
+  j["extra"] = true;
+  EXPECT_NE(error_of(j).find("scene.json: extra: unknown key"), std::string::npos);
+}
+
+TEST(SceneParse, MissingRequiredKeys) {
+  json j = base_scene();
+  j.erase("camera");
+  EXPECT_NE(error_of(j).find("scene.json: (top level): missing required key 'camera'"), std::string::npos)
+      << error_of(j);
+  j = base_scene();
+  j["film"].erase("width");
+  EXPECT_NE(error_of(j).find("scene.json: film: missing required key 'width'"), std::string::npos);
+  j = base_scene();
+  j["materials"]["wool"].erase("uv_scale");
+  EXPECT_NE(error_of(j).find("scene.json: materials.wool: missing required key 'uv_scale'"), std::string::npos);
+}
+
+TEST(SceneParse, WrongTypes) {
+  json j = base_scene();
+  j["film"]["width"] = "eight";
+  EXPECT_NE(error_of(j).find("scene.json: film.width: must be an integer, got string"), std::string::npos);
+  j = base_scene();
+  j["film"]["spp"] = 1.5;
+  EXPECT_NE(error_of(j).find("scene.json: film.spp: must be an integer, got 1.5"), std::string::npos);
+  j = base_scene();
+  j["camera"]["position"] = {0, 1};
+  EXPECT_NE(error_of(j).find("scene.json: camera.position: must have 3 elements, got 2"), std::string::npos);
+  j = base_scene();
+  j["camera"]["position"][1] = nullptr;
+  EXPECT_NE(error_of(j).find("scene.json: camera.position[1]: must be a number, got null"), std::string::npos);
+}
+
+TEST(SceneParse, FilmAndCameraRanges) {
+  json j = base_scene();
+  j["film"]["width"] = 0;
+  EXPECT_NE(error_of(j).find("film.width: must be in [1, 16384], got 0"), std::string::npos) << error_of(j);
+  j = base_scene();
+  j["camera"]["fov"] = 180;
+  EXPECT_NE(error_of(j).find("scene.json: camera.fov: must be in (0, 180), got 180"), std::string::npos);
+  j = base_scene();
+  j["camera"]["look_at"] = {0, 1, 5};
+  EXPECT_NE(error_of(j).find("camera.look_at: must differ from camera.position"), std::string::npos);
+  j = base_scene();
+  j["camera"]["position"] = {0, 0, 5};
+  j["camera"]["up"] = {0, 0, -2};
+  EXPECT_NE(error_of(j).find("camera.up: up must not be parallel"), std::string::npos) << error_of(j);
+  j = base_scene();
+  j["camera"]["up"] = {0, 0, 0};
+  EXPECT_NE(error_of(j).find("camera.up: must be a non-zero direction"), std::string::npos);
+  j = base_scene();
+  j["camera"]["position"][0] = 1e300;  // finite in double, not in float
+  EXPECT_NE(error_of(j).find("camera.position[0]: must be in [-1000000, 1000000], got 1e+300"), std::string::npos)
+      << error_of(j);
+  j = base_scene();
+  j["integrator"] = {{"strategy", "path"}};
+  EXPECT_NE(error_of(j).find("integrator.strategy: must be one of \"mis\", \"nee\", \"bsdf\", got \"path\""),
+            std::string::npos);
+}
+
+TEST(SceneParse, MaterialRanges) {
+  json j = base_scene();
+  j["materials"]["red"]["albedo"][0] = 1.5;
+  EXPECT_NE(error_of(j).find("scene.json: materials.red.albedo[0]: must be in [0, 1], got 1.5"), std::string::npos);
+  j = base_scene();
+  j["materials"]["glass"] = {{"type", "dielectric"}, {"eta", 0}};
+  EXPECT_NE(error_of(j).find("materials.glass.eta: must be in (0, 4], got 0"), std::string::npos) << error_of(j);
+  j = base_scene();
+  j["materials"]["sheet"] = {{"type", "thin"}, {"transmittance", {0.6, 0.6, 0.6}}, {"albedo", {0.5, 0.5, 0.5}}};
+  EXPECT_NE(error_of(j).find("materials.sheet.albedo: albedo + transmittance must be <= 1"), std::string::npos);
+  j = base_scene();
+  j["materials"]["x"] = {{"type", "metal"}};
+  EXPECT_NE(error_of(j).find("materials.x.type: must be one of"), std::string::npos);
+}
+
+TEST(SceneParse, RoughDielectricIsAcceptedWithAWarning) {
+  json j = base_scene();
+  j["materials"]["glass"] = {{"type", "dielectric"}, {"eta", 1.5}, {"roughness", 0.2}};
+  const SceneDesc d = parse(j);
+  ASSERT_EQ(d.warnings.messages.size(), 1u);
+  EXPECT_NE(d.warnings.messages[0].find("materials.glass.roughness"), std::string::npos);
+  EXPECT_NE(d.warnings.messages[0].find("not implemented yet"), std::string::npos);
+}
+
+TEST(SceneParse, KnitParameterRanges) {
+  auto knit_error = [](const char* key, json value) {
+    json j = base_scene();
+    j["materials"]["wool"][key] = value;
+    return error_of(j);
+  };
+  EXPECT_NE(knit_error("a", -1).find("scene.json: materials.wool.a: must be > 0, got -1"), std::string::npos)
+      << knit_error("a", -1);
+  EXPECT_NE(knit_error("h", 0).find("materials.wool.h: must be > 0, got 0"), std::string::npos);
+  EXPECT_NE(knit_error("d", 0).find("materials.wool.d: must be != 0, got 0"), std::string::npos);
+  EXPECT_NE(knit_error("r", -0.5).find("materials.wool.r: must be > 0, got -0.5"), std::string::npos);
+  EXPECT_NE(knit_error("r", 5000).find("materials.wool.r: must be at most 1000"), std::string::npos);
+  EXPECT_NE(knit_error("uv_scale", 0).find("materials.wool.uv_scale: must be > 0, got 0"), std::string::npos);
+  EXPECT_NE(knit_error("yarn_colors", json::array({{0.5, 1.2, 0.5}})).find("materials.wool.yarn_colors[0][1]: must be in [0, 1], got 1.2"),
+            std::string::npos);
+  EXPECT_NE(knit_error("yarn_colors", json::array()).find("materials.wool.yarn_colors: must have 1 to 256 elements, got 0"),
+            std::string::npos);
+  EXPECT_NE(knit_error("mode", "far").find("materials.wool.mode: must be one of \"near_field\", \"multi_scale\""),
+            std::string::npos);
+  EXPECT_NE(knit_error("capm", 1).find("materials.wool.capm: must be true or false, got number"), std::string::npos);
+  EXPECT_NE(knit_error("footprint_samples", 0).find("materials.wool.footprint_samples: must be in [1, 1024], got 0"),
+            std::string::npos);
+  EXPECT_NE(knit_error("specular", {{"roughness", 0}}).find("materials.wool.specular.roughness: must be in (0, 1], got 0"),
+            std::string::npos);
+  EXPECT_NE(knit_error("ply", {{"count", 3}, {"twist", 90}}).find("materials.wool.ply.twist: must be in [0, 90), got 90"),
+            std::string::npos);
+  EXPECT_NE(knit_error("fiber", {{"shade", 1}}).find("materials.wool.fiber.shade: unknown key"), std::string::npos);
+  EXPECT_NE(knit_error("body", {{"energy", -0.1}}).find("materials.wool.body.energy: must be in [0, 1], got -0.1"),
+            std::string::npos);
+}
+
+TEST(SceneParse, KnitPatterns) {
+  auto pattern_error = [](json pattern, json colors = nullptr) {
+    json j = base_scene();
+    j["materials"]["wool"]["pattern"] = pattern;
+    if (!colors.is_null()) j["materials"]["wool"]["colors"] = colors;
+    return error_of(j);
+  };
+  EXPECT_NE(pattern_error({"KKPP", "KKP"}).find("materials.wool.pattern[1]: has 3 cells but row 0 has 4"),
+            std::string::npos);
+  EXPECT_NE(pattern_error({"KXPP"}).find("materials.wool.pattern[0]: invalid stitch 'X' at character 2"),
+            std::string::npos);
+  EXPECT_NE(pattern_error(json::array({json::array({0, 4})})).find("materials.wool.pattern[0][1]: must be in [0, 3], got 4"),
+            std::string::npos);
+  EXPECT_NE(pattern_error(json::array()).find("materials.wool.pattern: must have 1 to 4096 elements, got 0"),
+            std::string::npos);
+  EXPECT_NE(pattern_error({"KP"}, json::array({json::array({0, 1, 0})})).find("materials.wool.colors[0]: must have 2 elements, got 3"),
+            std::string::npos);
+  EXPECT_NE(pattern_error({"KP"}, json::array({json::array({0, 1})})).find(
+                "materials.wool.yarn_colors: the colors matrix uses colour index 1 but only 1 yarn colours are given"),
+            std::string::npos);
+  EXPECT_NE(pattern_error("no-such-pattern.txt").find("materials.wool.pattern: file not found"), std::string::npos);
+  EXPECT_NE(pattern_error(42).find("materials.wool.pattern: must be a pattern file path or an array of rows"),
+            std::string::npos);
+
+  // Letters, digits, mixed separators and integer rows all read the same.
+  json j = base_scene();
+  j["materials"]["wool"]["pattern"] = {"k p, f b", "0123"};
+  j["materials"]["wool"]["colors"] = json::array({json::array({0, 1, 1, 0}), json::array({1, 1, 0, 0})});
+  j["materials"]["wool"]["yarn_colors"] = json::array({{0.1, 0.2, 0.3}, {0.9, 0.8, 0.7}});
+  const SceneDesc d = parse(j);
+  EXPECT_EQ(d.materials[1].knit.codes, (std::vector<int32_t>{0, 1, 2, 3, 0, 1, 2, 3}));
+  EXPECT_EQ(d.materials[1].knit.colors, (std::vector<int32_t>{0, 1, 1, 0, 1, 1, 0, 0}));
+}
+
+TEST(SceneParse, ObjectsAndTransforms) {
+  json j = base_scene();
+  j["objects"][0]["material"] = "blue";
+  EXPECT_NE(error_of(j).find("scene.json: objects[0].material: unknown material 'blue' (defined: red, wool)"),
+            std::string::npos)
+      << error_of(j);
+  j = base_scene();
+  j["objects"][0]["transform"] = {{"scale", 0}};
+  EXPECT_NE(error_of(j).find("objects[0].transform.scale: must be in [-1000000, 1000000] and != 0, got 0"),
+            std::string::npos)
+      << error_of(j);
+  j = base_scene();
+  j["objects"][0]["transform"] = {{"matrix", {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 1, 1}}};
+  EXPECT_NE(error_of(j).find("objects[0].transform.matrix: must be affine"), std::string::npos);
+  j = base_scene();
+  j["objects"][0]["transform"] = {{"matrix", {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 0, 0}, {0, 0, 0, 1}}}};
+  EXPECT_NE(error_of(j).find("objects[0].transform.matrix: is singular"), std::string::npos);
+  j = base_scene();
+  j["objects"][0]["transform"] = {{"matrix", {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}}, {"translate", {1, 2, 3}}};
+  EXPECT_NE(error_of(j).find("objects[0].transform.translate: cannot be combined with transform.matrix"),
+            std::string::npos);
+
+  // translate * rotate_z * rotate_y * rotate_x * scale
+  j = base_scene();
+  j["objects"][0]["transform"] = {{"translate", {1, 2, 3}}, {"rotate", {0, 90, 0}}, {"scale", 2}};
+  const SceneDesc d = parse(j);
+  const Vec3 p = d.objects[0].transform.point({1, 0, 0});
+  EXPECT_NEAR(p.x, 1.0f, 1e-5f);
+  EXPECT_NEAR(p.y, 2.0f, 1e-5f);
+  EXPECT_NEAR(p.z, 1.0f, 1e-5f);  // (2, 0, 0) rotated +90 deg about y is (0, 0, -2)
+}
+
+TEST(SceneParse, MissingFilesAreNamed) {
+  const std::string dir = test::test_dir();
+  json j = base_scene();
+  const std::string msg = scene_error_of([&] { parse_scene(with_mesh(j, "meshes/nope.obj"), "scene.json", dir); });
+  EXPECT_NE(msg.find("scene.json: objects[0].mesh: file not found: " + dir + "/meshes/nope.obj"), std::string::npos)
+      << msg;
+  j["lights"] = json::array({{{"type", "environment"}, {"file", "sky.exr"}}});
+  const std::string msg2 = scene_error_of([&] { parse_scene(with_mesh(j, test::mesh("quad.obj")), "scene.json", dir); });
+  EXPECT_NE(msg2.find("scene.json: lights[0].file: file not found"), std::string::npos) << msg2;
+  const std::string msg3 = scene_error_of([&] { load_scene_file(dir + "/missing.json"); });
+  EXPECT_NE(msg3.find("missing.json: scene file not found"), std::string::npos) << msg3;
+}
+
+TEST(SceneParse, Lights) {
+  auto light_error = [](json light) {
+    json j = base_scene();
+    j["lights"] = json::array({light});
+    return error_of(j);
+  };
+  EXPECT_NE(light_error({{"type", "quad"}, {"corner", {0, 0, 0}}, {"edge_u", {1, 0, 0}}, {"edge_v", {2, 0, 0}},
+                         {"emission", {1, 1, 1}}})
+                .find("lights[0].edge_v: edge_u and edge_v must be non-zero and not parallel"),
+            std::string::npos);
+  EXPECT_NE(light_error({{"type", "directional"}, {"to_light", {0, 1, 0}}, {"irradiance", {1, 1, 1}}, {"angular_radius", 0.5}})
+                .find("lights[0].angular_radius: must be 0"),
+            std::string::npos);
+  EXPECT_NE(light_error({{"type", "point"}, {"position", {0, 1, 0}}, {"intensity", {1, -1, 1}}})
+                .find("lights[0].intensity[1]: must be in [0, 1e+09], got -1"),
+            std::string::npos);
+  EXPECT_NE(light_error({{"type", "environment"}}).find("lights[0]: an environment light needs exactly one of"),
+            std::string::npos);
+  json j = base_scene();
+  j["lights"] = json::array({{{"type", "environment"}, {"color", {1, 1, 1}}}, {{"type", "environment"}, {"color", {1, 1, 1}}}});
+  EXPECT_NE(error_of(j).find("scene.json: lights[1]: only one environment light is allowed"), std::string::npos);
+  j = base_scene();
+  j["lights"] = json::array();
+  const SceneDesc d = parse(j);
+  ASSERT_EQ(d.warnings.messages.size(), 1u);
+  EXPECT_NE(d.warnings.messages[0].find("no lights"), std::string::npos);
+}
+
+// Errors found while building the scene (meshes, materials) also name the field.
+TEST(SceneBuild, KnitNeedsUvsAndTheExplicitPreviewFlag) {
+  const std::string dir = test::test_dir();
+  test::write_file(dir, "no_uv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  json j = base_scene();
+  j["objects"][0]["material"] = "wool";
+  const SceneDesc with_uv = parse_scene(with_mesh(j, test::mesh("quad.obj")), "scene.json", dir);
+  Warnings w;
+  const std::string msg = scene_error_of([&] { Scene s(with_uv, BuildOptions{}, w); });
+  EXPECT_NE(msg.find("scene.json: materials.wool: rendering the knit material is not implemented yet"), std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("--knit-preview-diffuse"), std::string::npos);
+  BuildOptions preview;
+  preview.knit_preview_diffuse = true;
+  EXPECT_NO_THROW(Scene(with_uv, preview, w));
+
+  const SceneDesc no_uv = parse_scene(with_mesh(j, "no_uv.obj"), "scene.json", dir);
+  const std::string msg2 = scene_error_of([&] { Scene s(no_uv, preview, w); });
+  EXPECT_NE(msg2.find("scene.json: objects[0].mesh: " + dir + "/no_uv.obj has no UV coordinates, which the knit material 'wool' needs"),
+            std::string::npos)
+      << msg2;
+  // A diffuse material is fine without UVs.
+  j["objects"][0]["material"] = "red";
+  EXPECT_NO_THROW(Scene(parse_scene(with_mesh(j, "no_uv.obj"), "scene.json", dir), preview, w));
+}
+
+TEST(SceneBuild, BadMeshesNameFileAndIndex) {
+  const std::string dir = test::test_dir();
+  test::write_file(dir, "nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n");
+  test::write_file(dir, "flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3\nf 2 3 4\n");
+  test::write_file(dir, "empty.obj", "v 0 0 0\nv 1 0 0\n");
+  json j = base_scene();
+  Warnings w;
+  BuildOptions preview;
+  preview.knit_preview_diffuse = true;
+  auto build_error = [&](const std::string& mesh) {
+    return scene_error_of([&] { Scene s(parse_scene(with_mesh(j, mesh), "scene.json", dir), preview, w); });
+  };
+  EXPECT_NE(build_error("nan.obj").find("scene.json: objects[0].mesh: " + dir + "/nan.obj: vertex 2 has a non-finite position"),
+            std::string::npos)
+      << build_error("nan.obj");
+  EXPECT_NE(build_error("flat.obj").find("flat.obj: all 2 triangles are degenerate (first: triangle 0)"), std::string::npos)
+      << build_error("flat.obj");
+  EXPECT_NE(build_error("empty.obj").find("scene.json: objects[0].mesh: " + dir + "/empty.obj:"), std::string::npos)
+      << build_error("empty.obj");
+}
+
+}  // namespace
+}  // namespace knit::render
