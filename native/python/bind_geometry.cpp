@@ -62,6 +62,41 @@ void put(double* row, const Vec3& a) {
   row[2] = a.z;
 }
 
+// Per-point results of query() and capm() as numpy arrays. A miss has
+// position (x, y, nan), stitch and color -1.
+struct HitArrays {
+  explicit HitArrays(ssize_t n)
+      : hit(n), pos(vec_array(n)), nor(vec_array(n)), tan(vec_array(n)), layers(n), stitch(n), color(n),
+        row(n), col(n) {}
+  void set(ssize_t i, const SurfaceHit& h, float x, float y) {
+    hit.mutable_data()[i] = h.hit;
+    put(pos.mutable_data(i, 0), h.hit ? h.position : Vec3{x, y, std::nanf("")});
+    put(nor.mutable_data(i, 0), h.normal);
+    put(tan.mutable_data(i, 0), h.tangent);
+    layers.mutable_data()[i] = h.layers;
+    stitch.mutable_data()[i] = h.hit ? h.stitch : -1;
+    color.mutable_data()[i] = h.hit ? h.color : -1;
+    row.mutable_data()[i] = h.row;
+    col.mutable_data()[i] = h.col;
+  }
+  ::py::dict dict() const {
+    ::py::dict d;
+    d["hit"] = hit;
+    d["position"] = pos;
+    d["normal"] = nor;
+    d["tangent"] = tan;
+    d["layers"] = layers;
+    d["stitch"] = stitch;
+    d["color"] = color;
+    d["row"] = row;
+    d["col"] = col;
+    return d;
+  }
+  ::py::array_t<bool> hit;
+  ::py::array_t<double> pos, nor, tan;
+  ::py::array_t<int> layers, stitch, color, row, col;
+};
+
 class PyKnitSurface {
  public:
   PyKnitSurface(const Pattern& p, const StitchParams& sp, double uv_scale)
@@ -72,40 +107,19 @@ class PyKnitSurface {
 
   ::py::dict query(const Arr& u, const Arr& v) const {
     Points P = points(u, v);
-    const ssize_t n = P.n;
-    ::py::array_t<bool> hit(n);
-    ::py::array_t<double> z(n), pos = vec_array(n), nor = vec_array(n), tan = vec_array(n);
-    ::py::array_t<int> layers(n), stitch(n), color(n), row(n), col(n);
+    HitArrays out(P.n);
+    ::py::array_t<double> z(P.n);
     {
       ::py::gil_scoped_release nogil;
-      auto H = hit.mutable_unchecked<1>();
-      auto Z = z.mutable_unchecked<1>();
-      for (ssize_t i = 0; i < n; ++i) {
+      for (ssize_t i = 0; i < P.n; ++i) {
         const float x = float(uv_scale_ * P.pu[P.su ? 0 : i]), y = float(uv_scale_ * P.pv[P.sv ? 0 : i]);
         const SurfaceHit h = surf_.query(x, y);
-        H(i) = h.hit;
-        Z(i) = h.hit ? h.position.z : std::nan("");
-        put(pos.mutable_data(i, 0), h.hit ? h.position : Vec3{x, y, std::nanf("")});
-        put(nor.mutable_data(i, 0), h.normal);
-        put(tan.mutable_data(i, 0), h.tangent);
-        layers.mutable_data()[i] = h.layers;
-        stitch.mutable_data()[i] = h.hit ? h.stitch : -1;
-        color.mutable_data()[i] = h.hit ? h.color : -1;
-        row.mutable_data()[i] = h.row;
-        col.mutable_data()[i] = h.col;
+        out.set(i, h, x, y);
+        z.mutable_data()[i] = h.hit ? h.position.z : std::nan("");
       }
     }
-    ::py::dict d;
-    d["hit"] = hit;
+    ::py::dict d = out.dict();
     d["z"] = z;
-    d["position"] = pos;
-    d["normal"] = nor;
-    d["tangent"] = tan;
-    d["layers"] = layers;
-    d["stitch"] = stitch;
-    d["color"] = color;
-    d["row"] = row;
-    d["col"] = col;
     return d;
   }
 
@@ -159,39 +173,20 @@ class PyKnitSurface {
     opt.max_segment = float(max_segment);
     opt.max_bend = float(max_bend);
     const ssize_t n = std::max(P.n, nw);
-    ::py::array_t<bool> hit(n);
-    ::py::array_t<double> pos = vec_array(n), nor = vec_array(n), tan = vec_array(n);
-    ::py::array_t<int> layers(n), steps(n), stitch(n), color(n), row(n), col(n);
+    HitArrays out(n);
+    ::py::array_t<int> steps(n);
     {
       ::py::gil_scoped_release nogil;
       for (ssize_t i = 0; i < n; ++i) {
         const float x = float(uv_scale_ * P.pu[P.su ? 0 : i]), y = float(uv_scale_ * P.pv[P.sv ? 0 : i]);
         const double* w = wi.data() + 3 * (nw == 1 ? 0 : i);
         const SurfaceHit h = surf_.capm(x, y, k::kv3(float(w[0]), float(w[1]), float(w[2])), frame, opt);
-        hit.mutable_data()[i] = h.hit;
-        const float nan = std::nanf("");
-        put(pos.mutable_data(i, 0), h.hit ? h.position : Vec3{nan, nan, nan});
-        put(nor.mutable_data(i, 0), h.normal);
-        put(tan.mutable_data(i, 0), h.tangent);
-        layers.mutable_data()[i] = h.layers;
+        out.set(i, h, std::nanf(""), std::nanf(""));
         steps.mutable_data()[i] = h.steps;
-        stitch.mutable_data()[i] = h.hit ? h.stitch : -1;
-        color.mutable_data()[i] = h.hit ? h.color : -1;
-        row.mutable_data()[i] = h.row;
-        col.mutable_data()[i] = h.col;
       }
     }
-    ::py::dict d;
-    d["hit"] = hit;
-    d["position"] = pos;
-    d["normal"] = nor;
-    d["tangent"] = tan;
-    d["layers"] = layers;
+    ::py::dict d = out.dict();
     d["steps"] = steps;
-    d["stitch"] = stitch;
-    d["color"] = color;
-    d["row"] = row;
-    d["col"] = col;
     return d;
   }
 

@@ -74,11 +74,10 @@ std::vector<TubeCrossing> KnitSurface::crossings(float x, float y) const {
   return out;
 }
 
-SurfaceHit KnitSurface::query(float x, float y) const {
-  k::KnitLineHit h = k::knit_vertical_query(geom_, codes(), colors(), x, y);
+// The yarn-hit fields of a SurfaceHit from the kernel's line hit.
+static SurfaceHit from_line_hit(const k::KnitLineHit& h) {
   SurfaceHit s;
   s.hit = h.hit != 0;
-  s.layers = h.crossings;
   if (s.hit) {
     s.position = h.p;
     s.normal = h.n;
@@ -88,6 +87,13 @@ SurfaceHit KnitSurface::query(float x, float y) const {
     s.stitch = h.code;
     s.color = h.colour;
   }
+  return s;
+}
+
+SurfaceHit KnitSurface::query(float x, float y) const {
+  const k::KnitLineHit h = k::knit_vertical_query(geom_, codes(), colors(), x, y);
+  SurfaceHit s = from_line_hit(h);
+  s.layers = h.crossings;
   return s;
 }
 
@@ -141,19 +147,11 @@ k::KnitCapm KnitSurface::march(k::KnitCapm start, Vec3 ray_world, const FramePro
 
 SurfaceHit KnitSurface::to_hit(const k::KnitCapm& st) const {
   SurfaceHit s;
-  s.steps = st.steps;
-  s.hit = st.state == KNIT_CAPM_HIT;
-  if (s.hit) {
-    const k::KnitLineHit& h = st.hit;
-    s.position = h.p;
-    s.normal = h.n;
-    s.tangent = h.tangent;
-    s.row = h.row;
-    s.col = h.col;
-    s.stitch = h.code;
-    s.color = h.colour;
-    s.layers = k::knit_vertical_query(geom_, codes(), colors(), h.p.x, h.p.y).crossings;
+  if (st.state == KNIT_CAPM_HIT) {
+    s = from_line_hit(st.hit);
+    s.layers = k::knit_vertical_query(geom_, codes(), colors(), st.hit.p.x, st.hit.p.y).crossings;
   }
+  s.steps = st.steps;
   return s;
 }
 
