@@ -75,7 +75,8 @@ Column column(::py::handle h, const char* name) {
   c.a = as_array(h, name);
   c.name = name;
   if (c.a.ndim() > 1)
-    throw ::py::value_error(std::string(name) + " must be a number or a 1-D array, got an array of " +
+    throw ::py::value_error(std::string(name) +
+                            " must be a number or a 1-D array, got an array of " +
                             std::to_string(c.a.ndim()) + " dimensions");
   c.single = c.a.ndim() == 0;
   c.n = c.single ? 1 : c.a.shape(0);
@@ -105,10 +106,11 @@ Rows rows(::py::handle h, const char* name, ssize_t k) {
   const bool ok = (r.a.ndim() == 1 && r.a.shape(0) == k) || (r.a.ndim() == 2 && r.a.shape(1) == k);
   if (!ok) {
     std::string shape = "(";
-    for (ssize_t d = 0; d < r.a.ndim(); ++d) shape += (d ? ", " : "") + std::to_string(r.a.shape(d));
+    for (ssize_t d = 0; d < r.a.ndim(); ++d)
+      shape += (d ? ", " : "") + std::to_string(r.a.shape(d));
     shape += r.a.ndim() == 1 ? ",)" : ")";
-    throw ::py::value_error(std::string(name) + " must have shape (" + std::to_string(k) + ",) or (N, " +
-                            std::to_string(k) + "), got " + shape);
+    throw ::py::value_error(std::string(name) + " must have shape (" + std::to_string(k) +
+                            ",) or (N, " + std::to_string(k) + "), got " + shape);
   }
   r.single = r.a.ndim() == 1;
   r.n = r.single ? 1 : r.a.shape(0);
@@ -125,8 +127,9 @@ class Broadcast {
       n_ = n;
       first_ = name;
     } else if (n != n_) {
-      throw ::py::value_error(std::string(name) + " has " + std::to_string(n) + " rows but " + first_ +
-                              " has " + std::to_string(n_) + "; give N rows or a single value");
+      throw ::py::value_error(std::string(name) + " has " + std::to_string(n) + " rows but " +
+                              first_ + " has " + std::to_string(n_) +
+                              "; give N rows or a single value");
     }
   }
   void add(const Rows& r) { add(r.name, r.n, r.single); }
@@ -143,8 +146,8 @@ void check_finite_rows(const Rows& r) {
   for (ssize_t i = 0; i < m; ++i)
     for (ssize_t j = 0; j < r.k; ++j)
       if (!std::isfinite(r.row(i)[j]))
-        throw ::py::value_error(idx(r.name, i, r.single) + " must be finite, got " + num(r.row(i)[j]) +
-                                " in component " + std::to_string(j));
+        throw ::py::value_error(idx(r.name, i, r.single) + " must be finite, got " +
+                                num(r.row(i)[j]) + " in component " + std::to_string(j));
 }
 
 std::string vec_str(const double* p) {
@@ -159,7 +162,8 @@ void check_unit_rows(const Rows& r) {
     const double* p = r.row(i);
     const double len = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
     if (!(std::abs(len - 1.0) <= kUnitTol))
-      throw ::py::value_error(idx(r.name, i, r.single) + " must be a unit vector (length within 1e-3 of 1), got " +
+      throw ::py::value_error(idx(r.name, i, r.single) +
+                              " must be a unit vector (length within 1e-3 of 1), got " +
                               vec_str(p) + " of length " + num(len));
   }
 }
@@ -176,8 +180,9 @@ void check_range_column(const Column& c, double lo, double hi, bool open_hi) {
   for (ssize_t i = 0; i < m; ++i) {
     const double v = c.at(i);
     if (!(v >= lo && (open_hi ? v < hi : v <= hi)))
-      throw ::py::value_error(idx(c.name, i, c.single) + " = " + num(v) + ": must be finite and in [" + num(lo) +
-                              ", " + num(hi) + (open_hi ? ")" : "]"));
+      throw ::py::value_error(idx(c.name, i, c.single) + " = " + num(v) +
+                              ": must be finite and in [" + num(lo) + ", " + num(hi) +
+                              (open_hi ? ")" : "]"));
   }
 }
 
@@ -187,7 +192,8 @@ void check_int_column(const Column& c, double lo, double hi, const std::string& 
     const double v = c.at(i);
     if (!std::isfinite(v) || v != std::floor(v))
       throw ::py::value_error(idx(c.name, i, c.single) + " = " + num(v) + ": must be an integer");
-    if (v < lo || v > hi) throw ::py::value_error(idx(c.name, i, c.single) + " = " + num(v) + ": " + rule);
+    if (v < lo || v > hi)
+      throw ::py::value_error(idx(c.name, i, c.single) + " = " + num(v) + ": " + rule);
   }
 }
 
@@ -209,8 +215,8 @@ struct PointArgs {
   }
 };
 
-PointArgs point_args(const YarnBsdf& bsdf, ::py::handle color, ::py::handle layers, ::py::handle shadow,
-                     ::py::handle p_delta, Broadcast& bc) {
+PointArgs point_args(const YarnBsdf& bsdf, ::py::handle color, ::py::handle layers,
+                     ::py::handle shadow, ::py::handle p_delta, Broadcast& bc) {
   PointArgs a{column(color, "color"), column(layers, "layers"), column(shadow, "shadow"),
               column(p_delta, "p_delta")};
   const int nc = bsdf.params().num_colors();
@@ -235,8 +241,9 @@ std::vector<Rgb> colors_arg(::py::handle h, const char* name) {
     return out;
   }
   if (a.ndim() != 2 || a.shape(1) != 3)
-    throw ::py::value_error(std::string(name) +
-                            " must be a list of RGB triples (shape (K, 3)) or one RGB triple (shape (3,))");
+    throw ::py::value_error(
+        std::string(name) +
+        " must be a list of RGB triples (shape (K, 3)) or one RGB triple (shape (3,))");
   for (ssize_t i = 0; i < a.shape(0); ++i) {
     const double* p = a.data() + 3 * i;
     out.push_back(Rgb{float(p[0]), float(p[1]), float(p[2])});
@@ -244,8 +251,9 @@ std::vector<Rgb> colors_arg(::py::handle h, const char* name) {
   return out;  // an empty list is left to YarnBsdfParams::validate, which names the field
 }
 
-YarnBsdf make_bsdf(double rx, double ry, double tx, double ty, double eta, double body_energy, double body_reflect,
-                   double optical_depth, ::py::handle reflect, ::py::handle transmit) {
+YarnBsdf make_bsdf(double rx, double ry, double tx, double ty, double eta, double body_energy,
+                   double body_reflect, double optical_depth, ::py::handle reflect,
+                   ::py::handle transmit) {
   YarnBsdfParams p;
   p.roughness_x = float(rx);
   p.roughness_y = float(ry);
@@ -296,9 +304,10 @@ YarnBsdf make_bsdf(double rx, double ry, double tx, double ty, double eta, doubl
 
 std::string bsdf_repr(const YarnBsdf& b) {
   const YarnBsdfParams& p = b.params();
-  return "knitshade.YarnBSDF(roughness_x=" + num(p.roughness_x) + ", roughness_y=" + num(p.roughness_y) +
-         ", trans_roughness_x=" + num(p.trans_roughness_x) + ", trans_roughness_y=" + num(p.trans_roughness_y) +
-         ", eta=" + num(p.eta) + ", body_energy=" + num(p.body_energy) + ", body_reflect=" + num(p.body_reflect) +
+  return "knitshade.YarnBSDF(roughness_x=" + num(p.roughness_x) +
+         ", roughness_y=" + num(p.roughness_y) + ", trans_roughness_x=" + num(p.trans_roughness_x) +
+         ", trans_roughness_y=" + num(p.trans_roughness_y) + ", eta=" + num(p.eta) +
+         ", body_energy=" + num(p.body_energy) + ", body_reflect=" + num(p.body_reflect) +
          ", optical_depth=" + num(p.optical_depth) + ", <" + std::to_string(p.num_colors()) +
          (p.num_colors() == 1 ? " colour>)" : " colours>)");
 }
@@ -344,8 +353,9 @@ void put3(::py::array_t<double>& a, ssize_t i, double x, double y, double z) {
 void put3(::py::array_t<double>& a, ssize_t i, const Vec3& v) { put3(a, i, v.x, v.y, v.z); }
 void put3(::py::array_t<double>& a, ssize_t i, const Rgb& c) { put3(a, i, c.r, c.g, c.b); }
 
-::py::array_t<double> bsdf_eval(const YarnBsdf& b, ::py::handle wo_h, ::py::handle wi_h, ::py::handle color,
-                                ::py::handle layers, ::py::handle shadow, ::py::handle p_delta) {
+::py::array_t<double> bsdf_eval(const YarnBsdf& b, ::py::handle wo_h, ::py::handle wi_h,
+                                ::py::handle color, ::py::handle layers, ::py::handle shadow,
+                                ::py::handle p_delta) {
   Rows wo = rows(wo_h, "wo", 3), wi = rows(wi_h, "wi", 3);
   check_unit_rows(wo);
   check_unit_rows(wi);
@@ -365,8 +375,9 @@ void put3(::py::array_t<double>& a, ssize_t i, const Rgb& c) { put3(a, i, c.r, c
   return out;
 }
 
-::py::array_t<double> bsdf_pdf(const YarnBsdf& b, ::py::handle wo_h, ::py::handle wi_h, ::py::handle color,
-                               ::py::handle layers, ::py::handle shadow, ::py::handle p_delta) {
+::py::array_t<double> bsdf_pdf(const YarnBsdf& b, ::py::handle wo_h, ::py::handle wi_h,
+                               ::py::handle color, ::py::handle layers, ::py::handle shadow,
+                               ::py::handle p_delta) {
   Rows wo = rows(wo_h, "wo", 3), wi = rows(wi_h, "wi", 3);
   check_unit_rows(wo);
   check_unit_rows(wi);
@@ -391,8 +402,8 @@ void put3(::py::array_t<double>& a, ssize_t i, const Rgb& c) { put3(a, i, c.r, c
       for (int j = 0; j < 3; ++j) {
         const double v = u.row(i)[j];
         if (!(v >= 0 && v < 1))
-          throw ::py::value_error((u.single ? "u[" : "u[" + std::to_string(i) + ", ") + std::to_string(j) +
-                                  "] = " + num(v) + ": must be in [0, 1)");
+          throw ::py::value_error((u.single ? "u[" : "u[" + std::to_string(i) + ", ") +
+                                  std::to_string(j) + "] = " + num(v) + ": must be in [0, 1)");
       }
   }
   Broadcast bc;
@@ -410,7 +421,8 @@ void put3(::py::array_t<double>& a, ssize_t i, const Rgb& c) { put3(a, i, c.r, c
   bool* pv = valid.mutable_data();
   run_rows(n, [&](ssize_t i) {
     const double* ur = u.row(i);
-    const std::array<float, 3> uf = {std::min(float(ur[0]), kBelowOne), std::min(float(ur[1]), kBelowOne),
+    const std::array<float, 3> uf = {std::min(float(ur[0]), kBelowOne),
+                                     std::min(float(ur[1]), kBelowOne),
                                      std::min(float(ur[2]), kBelowOne)};
     const BsdfSample s = b.sample(wo.vec(i), uf, pt.at(i));
     pw[3 * i] = s.wi.x;
@@ -432,9 +444,9 @@ void put3(::py::array_t<double>& a, ssize_t i, const Rgb& c) { put3(a, i, c.r, c
   return d;
 }
 
-::py::array_t<double> bsdf_eval_lobe(const YarnBsdf& b, ::py::handle lobe_h, ::py::handle wo_h, ::py::handle wi_h,
-                                     ::py::handle color, ::py::handle layers, ::py::handle shadow,
-                                     ::py::handle p_delta) {
+::py::array_t<double> bsdf_eval_lobe(const YarnBsdf& b, ::py::handle lobe_h, ::py::handle wo_h,
+                                     ::py::handle wi_h, ::py::handle color, ::py::handle layers,
+                                     ::py::handle shadow, ::py::handle p_delta) {
   const Lobe lobe = lobe_arg(lobe_h);
   Rows wo = rows(wo_h, "wo", 3), wi = rows(wi_h, "wi", 3);
   check_unit_rows(wo);
@@ -456,7 +468,8 @@ void put3(::py::array_t<double>& a, ssize_t i, const Rgb& c) { put3(a, i, c.r, c
 }
 
 ::py::array_t<double> bsdf_lobe_probs(const YarnBsdf& b, ::py::handle wo_h, ::py::handle color,
-                                      ::py::handle layers, ::py::handle shadow, ::py::handle p_delta) {
+                                      ::py::handle layers, ::py::handle shadow,
+                                      ::py::handle p_delta) {
   Rows wo = rows(wo_h, "wo", 3);
   check_unit_rows(wo);
   Broadcast bc;
@@ -475,8 +488,8 @@ void put3(::py::array_t<double>& a, ssize_t i, const Rgb& c) { put3(a, i, c.r, c
 // ---------------------------------------------------------------------------
 // PlyProfile
 
-PlyProfile make_ply(int ply_count, ::py::object ply_radius, double ply_twist, int fiber_count, double fiber_twist,
-                    double yarn_radius) {
+PlyProfile make_ply(int ply_count, ::py::object ply_radius, double ply_twist, int fiber_count,
+                    double fiber_twist, double yarn_radius) {
   PlyParams p;
   p.ply_count = ply_count;
   if (ply_radius.is_none()) {
@@ -506,7 +519,8 @@ PlyProfile make_ply(int ply_count, ::py::object ply_radius, double ply_twist, in
   bc.add(s);
   const ssize_t n = bc.n();
   ::py::array_t<double> shadow(n), ply_shadow(n), fiber_shadow(n);
-  ::py::array_t<double> normal = out_rows(n, 3), tangent = out_rows(n, 3), bitangent = out_rows(n, 3);
+  ::py::array_t<double> normal = out_rows(n, 3), tangent = out_rows(n, 3),
+                        bitangent = out_rows(n, 3);
   double* g = shadow.mutable_data();
   double* gp = ply_shadow.mutable_data();
   double* gf = fiber_shadow.mutable_data();
@@ -545,11 +559,14 @@ PlyProfile make_ply(int ply_count, ::py::object ply_radius, double ply_twist, in
 // ---------------------------------------------------------------------------
 // KnitMaterial
 
-const char* mode_name(KnitMode m) { return m == KnitMode::MultiScale ? "multi_scale" : "near_field"; }
+const char* mode_name(KnitMode m) {
+  return m == KnitMode::MultiScale ? "multi_scale" : "near_field";
+}
 
-KnitMaterial make_material(const Pattern& pattern, const StitchParams& stitch, ::py::object bsdf, ::py::object ply,
-                           const std::string& mode, bool capm, bool ply_detail, int footprint_points,
-                           double uv_scale, int max_steps, double max_segment, double max_bend) {
+KnitMaterial make_material(const Pattern& pattern, const StitchParams& stitch, ::py::object bsdf,
+                           ::py::object ply, const std::string& mode, bool capm, bool ply_detail,
+                           int footprint_points, double uv_scale, int max_steps, double max_segment,
+                           double max_bend) {
   KnitMaterialParams mp;
   mp.stitch = stitch;
   if (bsdf.is_none()) {
@@ -560,8 +577,9 @@ KnitMaterial make_material(const Pattern& pattern, const StitchParams& stitch, :
     ::py::object cls = ::py::module_::import("knitshade").attr("YarnBSDF");
     mp.bsdf = cls(**bsdf.cast<::py::dict>()).cast<const YarnBsdf&>().params();
   } else {
-    throw ::py::type_error("bsdf must be a knitshade.YarnBSDF, a dict of its keyword arguments or None, got " +
-                           std::string(::py::str(::py::type::handle_of(bsdf).attr("__name__"))));
+    throw ::py::type_error(
+        "bsdf must be a knitshade.YarnBSDF, a dict of its keyword arguments or None, got " +
+        std::string(::py::str(::py::type::handle_of(bsdf).attr("__name__"))));
   }
   if (ply.is_none()) {
     mp.ply = PlyParams{};
@@ -571,8 +589,9 @@ KnitMaterial make_material(const Pattern& pattern, const StitchParams& stitch, :
     ::py::object cls = ::py::module_::import("knitshade").attr("PlyProfile");
     mp.ply = cls(**ply.cast<::py::dict>()).cast<const PlyProfile&>().params();
   } else {
-    throw ::py::type_error("ply must be a knitshade.PlyProfile, a dict of its keyword arguments or None, got " +
-                           std::string(::py::str(::py::type::handle_of(ply).attr("__name__"))));
+    throw ::py::type_error(
+        "ply must be a knitshade.PlyProfile, a dict of its keyword arguments or None, got " +
+        std::string(::py::str(::py::type::handle_of(ply).attr("__name__"))));
   }
   if (mode == "near_field") {
     mp.mode = KnitMode::NearField;
@@ -630,9 +649,10 @@ struct HitArgs {
   }
 };
 
-HitArgs hit_args(const KnitMaterial& m, ::py::handle u, ::py::handle v, ::py::handle ray_dir, ::py::handle t,
-                 ::py::handle b, ::py::handle n, ::py::handle ppw, ::py::handle kx, ::py::handle ky,
-                 ::py::handle footprint, ::py::handle shift, const FrameProvider* frame) {
+HitArgs hit_args(const KnitMaterial& m, ::py::handle u, ::py::handle v, ::py::handle ray_dir,
+                 ::py::handle t, ::py::handle b, ::py::handle n, ::py::handle ppw, ::py::handle kx,
+                 ::py::handle ky, ::py::handle footprint, ::py::handle shift,
+                 const FrameProvider* frame) {
   HitArgs a;
   a.frame = frame;
   a.uv_scale = m.params().uv_scale;
@@ -662,20 +682,23 @@ HitArgs hit_args(const KnitMaterial& m, ::py::handle u, ::py::handle v, ::py::ha
     ++given;
   }
   if (given != 0 && given != 3)
-    throw ::py::value_error("t, b and n must be given together (an orthonormal frame) or not at all");
+    throw ::py::value_error(
+        "t, b and n must be given together (an orthonormal frame) or not at all");
   if (given == 3) {
     const Rows* R[3] = {&a.t, &a.b, &a.n};
     const char* names[3][2] = {{"t", "b"}, {"t", "n"}, {"b", "n"}};
     const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
-    const ssize_t rows_n = std::max({a.t.single ? 1 : a.t.n, a.b.single ? 1 : a.b.n, a.n.single ? 1 : a.n.n});
+    const ssize_t rows_n =
+        std::max({a.t.single ? 1 : a.t.n, a.b.single ? 1 : a.b.n, a.n.single ? 1 : a.n.n});
     for (ssize_t i = 0; i < rows_n; ++i)
       for (int p = 0; p < 3; ++p) {
         const double* x = R[pairs[p][0]]->row(i);
         const double* y = R[pairs[p][1]]->row(i);
         const double d = x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
         if (!(std::abs(d) <= kUnitTol))
-          throw ::py::value_error(std::string("the frame (t, b, n) must be orthonormal: ") + names[p][0] + " . " +
-                                  names[p][1] + " = " + num(d) + (rows_n > 1 ? " in row " + std::to_string(i) : ""));
+          throw ::py::value_error(std::string("the frame (t, b, n) must be orthonormal: ") +
+                                  names[p][0] + " . " + names[p][1] + " = " + num(d) +
+                                  (rows_n > 1 ? " in row " + std::to_string(i) : ""));
       }
   }
   a.ppw = column(ppw, "pattern_per_world");
@@ -684,8 +707,8 @@ HitArgs hit_args(const KnitMaterial& m, ::py::handle u, ::py::handle v, ::py::ha
     const ssize_t m2 = a.ppw.single ? 1 : a.ppw.n;
     for (ssize_t i = 0; i < m2; ++i)
       if (!(a.ppw.at(i) > 0))
-        throw ::py::value_error(idx("pattern_per_world", i, a.ppw.single) + " = " + num(a.ppw.at(i)) +
-                                ": must be > 0");
+        throw ::py::value_error(idx("pattern_per_world", i, a.ppw.single) + " = " +
+                                num(a.ppw.at(i)) + ": must be > 0");
   }
   bc.add(a.ppw);
   a.kx = column(kx, "kx");
@@ -707,8 +730,9 @@ HitArgs hit_args(const KnitMaterial& m, ::py::handle u, ::py::handle v, ::py::ha
       for (int j = 0; j < 2; ++j) {
         const double s = a.shift.row(i)[j];
         if (!(s >= 0 && s < 1))
-          throw ::py::value_error((a.shift.single ? "shift[" : "shift[" + std::to_string(i) + ", ") +
-                                  std::to_string(j) + "] = " + num(s) + ": must be in [0, 1)");
+          throw ::py::value_error(
+              (a.shift.single ? "shift[" : "shift[" + std::to_string(i) + ", ") +
+              std::to_string(j) + "] = " + num(s) + ": must be in [0, 1)");
       }
   }
   bc.add(a.shift);
@@ -720,7 +744,8 @@ HitArgs hit_args(const KnitMaterial& m, ::py::handle u, ::py::handle v, ::py::ha
   const ssize_t n = a.count;
   const double nan = std::nan("");
   ::py::array_t<bool> pass(n), back(n);
-  ::py::array_t<double> st = out_rows(n, 3), sb = out_rows(n, 3), sn = out_rows(n, 3), off = out_rows(n, 3);
+  ::py::array_t<double> st = out_rows(n, 3), sb = out_rows(n, 3), sn = out_rows(n, 3),
+                        off = out_rows(n, 3);
   ::py::array_t<double> kd_r = out_rows(n, 3), kd_t = out_rows(n, 3), alpha = out_rows(n, 4);
   ::py::array_t<int32_t> color(n), layers(n), steps(n);
   ::py::array_t<double> shadow(n), p_delta(n);
@@ -783,7 +808,9 @@ HitArgs hit_args(const KnitMaterial& m, ::py::handle u, ::py::handle v, ::py::ha
 ::py::array_t<double> material_transmittance(const KnitMaterial& m, const HitArgs& a) {
   ::py::array_t<double> out(a.count);
   double* o = out.mutable_data();
-  run_rows(a.count, [&](ssize_t i) { o[i] = m.transmittance(a.hit(i), a.ray.vec(i), a.frame, a.shift_at(i)); });
+  run_rows(a.count, [&](ssize_t i) {
+    o[i] = m.transmittance(a.hit(i), a.ray.vec(i), a.frame, a.shift_at(i));
+  });
   return out;
 }
 
@@ -801,12 +828,14 @@ void bind_appearance(::py::module_& m) {
   m.attr("BSDF_TRANSMIT") = int(kBsdfTransmit);
   m.attr("BSDF_DELTA") = int(kBsdfDelta);
 
-  ::py::enum_<Lobe>(m, "Lobe", "The four lobes of the yarn BSDF (paper Eq. 1), for YarnBSDF.eval_lobe.")
+  ::py::enum_<Lobe>(m, "Lobe",
+                    "The four lobes of the yarn BSDF (paper Eq. 1), for YarnBSDF.eval_lobe.")
       .value("SPECULAR_REFLECTION", Lobe::SpecularReflection, "f_R: rough dielectric reflection")
       .value("SPECULAR_TRANSMISSION", Lobe::SpecularTransmission,
              "tau (1 - B) f_T: thin-slab rough dielectric transmission")
       .value("BODY_REFLECTION", Lobe::BodyReflection, "r B G (1 - F_o)(1 - F_i) LS k_R")
-      .value("BODY_TRANSMISSION", Lobe::BodyTransmission, "tau (1 - r) B G (1 - F_o)(1 - F_i) k_T / pi");
+      .value("BODY_TRANSMISSION", Lobe::BodyTransmission,
+             "tau (1 - r) B G (1 - F_o)(1 - F_i) k_T / pi");
 
   const std::string point_doc = kPointDoc;
 
@@ -834,28 +863,41 @@ list of RGB triples or a (K, 3) array, channels in [0, 1], 1-256 colours;
 default [(0.8, 0.8, 0.8)]), transmit_colors (k_y^B, same count; default: the
 reflect colours). Values are stored as float32. Invalid values raise
 ValueError with the C++ message naming the field and value.)doc")
-      .def(::py::init(&make_bsdf), ::py::kw_only(), ::py::arg("roughness_x") = 0.15, ::py::arg("roughness_y") = 0.45,
-           ::py::arg("trans_roughness_x") = 0.30, ::py::arg("trans_roughness_y") = 0.60, ::py::arg("eta") = 1.55,
-           ::py::arg("body_energy") = 0.7, ::py::arg("body_reflect") = 0.6, ::py::arg("optical_depth") = 1.0,
-           ::py::arg("reflect_colors") = ::py::none(), ::py::arg("transmit_colors") = ::py::none())
-      .def_property_readonly("roughness_x", [](const YarnBsdf& b) { return b.params().roughness_x; })
-      .def_property_readonly("roughness_y", [](const YarnBsdf& b) { return b.params().roughness_y; })
-      .def_property_readonly("trans_roughness_x", [](const YarnBsdf& b) { return b.params().trans_roughness_x; })
-      .def_property_readonly("trans_roughness_y", [](const YarnBsdf& b) { return b.params().trans_roughness_y; })
+      .def(::py::init(&make_bsdf), ::py::kw_only(), ::py::arg("roughness_x") = 0.15,
+           ::py::arg("roughness_y") = 0.45, ::py::arg("trans_roughness_x") = 0.30,
+           ::py::arg("trans_roughness_y") = 0.60, ::py::arg("eta") = 1.55,
+           ::py::arg("body_energy") = 0.7, ::py::arg("body_reflect") = 0.6,
+           ::py::arg("optical_depth") = 1.0, ::py::arg("reflect_colors") = ::py::none(),
+           ::py::arg("transmit_colors") = ::py::none())
+      .def_property_readonly("roughness_x",
+                             [](const YarnBsdf& b) { return b.params().roughness_x; })
+      .def_property_readonly("roughness_y",
+                             [](const YarnBsdf& b) { return b.params().roughness_y; })
+      .def_property_readonly("trans_roughness_x",
+                             [](const YarnBsdf& b) { return b.params().trans_roughness_x; })
+      .def_property_readonly("trans_roughness_y",
+                             [](const YarnBsdf& b) { return b.params().trans_roughness_y; })
       .def_property_readonly("eta", [](const YarnBsdf& b) { return b.params().eta; })
-      .def_property_readonly("body_energy", [](const YarnBsdf& b) { return b.params().body_energy; })
-      .def_property_readonly("body_reflect", [](const YarnBsdf& b) { return b.params().body_reflect; })
-      .def_property_readonly("optical_depth", [](const YarnBsdf& b) { return b.params().optical_depth; })
+      .def_property_readonly("body_energy",
+                             [](const YarnBsdf& b) { return b.params().body_energy; })
+      .def_property_readonly("body_reflect",
+                             [](const YarnBsdf& b) { return b.params().body_reflect; })
+      .def_property_readonly("optical_depth",
+                             [](const YarnBsdf& b) { return b.params().optical_depth; })
       .def_property_readonly(
-          "reflect_colors", [](const YarnBsdf& b) { return colors_array(b.params().reflect_colors); },
+          "reflect_colors",
+          [](const YarnBsdf& b) { return colors_array(b.params().reflect_colors); },
           "k_x^B per colour index, a (K, 3) array (a copy).")
       .def_property_readonly(
-          "transmit_colors", [](const YarnBsdf& b) { return colors_array(b.params().transmit_colors); },
+          "transmit_colors",
+          [](const YarnBsdf& b) { return colors_array(b.params().transmit_colors); },
           "k_y^B per colour index, a (K, 3) array (a copy).")
-      .def_property_readonly("num_colors", [](const YarnBsdf& b) { return b.params().num_colors(); })
+      .def_property_readonly("num_colors",
+                             [](const YarnBsdf& b) { return b.params().num_colors(); })
       .def("params", &bsdf_kwargs, "The keyword arguments that rebuild this BSDF, as a dict.")
-      .def("eval", &bsdf_eval, ::py::arg("wo"), ::py::arg("wi"), ::py::kw_only(), ::py::arg("color") = 0,
-           ::py::arg("layers") = 1, ::py::arg("shadow") = 1.0, ::py::arg("p_delta") = 0.0,
+      .def("eval", &bsdf_eval, ::py::arg("wo"), ::py::arg("wi"), ::py::kw_only(),
+           ::py::arg("color") = 0, ::py::arg("layers") = 1, ::py::arg("shadow") = 1.0,
+           ::py::arg("p_delta") = 0.0,
            (R"doc(
 eval(wo, wi) -> (N, 3) RGB array: (1 - p_delta) f(wo, wi) |wi.z|, the cosine
 included (what light sampling multiplies incoming radiance by). wo and wi
@@ -864,16 +906,18 @@ vector in the local frame (ValueError naming the argument and row). N = 1
 when every input is a single value.)doc" +
             point_doc)
                .c_str())
-      .def("pdf", &bsdf_pdf, ::py::arg("wo"), ::py::arg("wi"), ::py::kw_only(), ::py::arg("color") = 0,
-           ::py::arg("layers") = 1, ::py::arg("shadow") = 1.0, ::py::arg("p_delta") = 0.0,
+      .def("pdf", &bsdf_pdf, ::py::arg("wo"), ::py::arg("wi"), ::py::kw_only(),
+           ::py::arg("color") = 0, ::py::arg("layers") = 1, ::py::arg("shadow") = 1.0,
+           ::py::arg("p_delta") = 0.0,
            (R"doc(
 pdf(wo, wi) -> (N,) array: the solid-angle density with which sample()
 returns wi, times (1 - p_delta) (the pass-through event is discrete and not
 part of it).)doc" +
             point_doc)
                .c_str())
-      .def("sample", &bsdf_sample, ::py::arg("wo"), ::py::arg("u"), ::py::kw_only(), ::py::arg("color") = 0,
-           ::py::arg("layers") = 1, ::py::arg("shadow") = 1.0, ::py::arg("p_delta") = 0.0,
+      .def("sample", &bsdf_sample, ::py::arg("wo"), ::py::arg("u"), ::py::kw_only(),
+           ::py::arg("color") = 0, ::py::arg("layers") = 1, ::py::arg("shadow") = 1.0,
+           ::py::arg("p_delta") = 0.0,
            (R"doc(
 sample(wo, u) -> dict of arrays: wi (N, 3), weight (N, 3) = eval / pdf, pdf
 (N,), flags (N,) int32 (BSDF_REFLECT, BSDF_TRANSMIT, plus BSDF_DELTA for a
@@ -884,8 +928,9 @@ u[:, 0] chooses pass-through, u[:, 1] the lobe (then reused), u[:, 2] the
 direction.)doc" +
             point_doc)
                .c_str())
-      .def("eval_lobe", &bsdf_eval_lobe, ::py::arg("lobe"), ::py::arg("wo"), ::py::arg("wi"), ::py::kw_only(),
-           ::py::arg("color") = 0, ::py::arg("layers") = 1, ::py::arg("shadow") = 1.0, ::py::arg("p_delta") = 0.0,
+      .def("eval_lobe", &bsdf_eval_lobe, ::py::arg("lobe"), ::py::arg("wo"), ::py::arg("wi"),
+           ::py::kw_only(), ::py::arg("color") = 0, ::py::arg("layers") = 1,
+           ::py::arg("shadow") = 1.0, ::py::arg("p_delta") = 0.0,
            (R"doc(
 eval_lobe(lobe, wo, wi) -> (N, 3): one lobe's weighted contribution to eval,
 cosine included, p_delta NOT applied (so for p_delta = 0 the four lobes sum to
@@ -893,8 +938,9 @@ eval). lobe: 'specular_reflection', 'specular_transmission',
 'body_reflection', 'body_transmission' or a knitshade.Lobe.)doc" +
             point_doc)
                .c_str())
-      .def("lobe_probabilities", &bsdf_lobe_probs, ::py::arg("wo"), ::py::kw_only(), ::py::arg("color") = 0,
-           ::py::arg("layers") = 1, ::py::arg("shadow") = 1.0, ::py::arg("p_delta") = 0.0,
+      .def("lobe_probabilities", &bsdf_lobe_probs, ::py::arg("wo"), ::py::kw_only(),
+           ::py::arg("color") = 0, ::py::arg("layers") = 1, ::py::arg("shadow") = 1.0,
+           ::py::arg("p_delta") = 0.0,
            (R"doc(
 lobe_probabilities(wo) -> (N, 4): the probabilities with which sample()
 picks each lobe at wo (columns in knitshade.Lobe order), given that it does
@@ -904,12 +950,13 @@ not pass through; each row sums to 1, or is all zero when the BSDF is.)doc" +
       .def("__repr__", &bsdf_repr)
       .def(::py::pickle([](const YarnBsdf& b) { return bsdf_kwargs(b); },
                         [](const ::py::dict& d) {
-                          return make_bsdf(d["roughness_x"].cast<double>(), d["roughness_y"].cast<double>(),
-                                           d["trans_roughness_x"].cast<double>(),
-                                           d["trans_roughness_y"].cast<double>(), d["eta"].cast<double>(),
-                                           d["body_energy"].cast<double>(), d["body_reflect"].cast<double>(),
-                                           d["optical_depth"].cast<double>(), d["reflect_colors"],
-                                           d["transmit_colors"]);
+                          return make_bsdf(
+                              d["roughness_x"].cast<double>(), d["roughness_y"].cast<double>(),
+                              d["trans_roughness_x"].cast<double>(),
+                              d["trans_roughness_y"].cast<double>(), d["eta"].cast<double>(),
+                              d["body_energy"].cast<double>(), d["body_reflect"].cast<double>(),
+                              d["optical_depth"].cast<double>(), d["reflect_colors"],
+                              d["transmit_colors"]);
                         }));
 
   ::py::class_<PlyProfile>(m, "PlyProfile", R"doc(
@@ -923,18 +970,24 @@ yarn surface, radians, |.| <= 1.4), fiber_count=40 (fibres per ply,
 [0, 10000]; < 4: no fibre profile), fiber_twist=-0.35 (fibre helix angle on
 the ply, radians, |.| <= 1.4), yarn_radius=0.75 (pattern units, (0, 1000]).
 Invalid values raise ValueError with the C++ message naming the field.)doc")
-      .def(::py::init(&make_ply), ::py::kw_only(), ::py::arg("ply_count") = 3, ::py::arg("ply_radius") = ::py::none(),
-           ::py::arg("ply_twist") = 0.5, ::py::arg("fiber_count") = 40, ::py::arg("fiber_twist") = -0.35,
+      .def(::py::init(&make_ply), ::py::kw_only(), ::py::arg("ply_count") = 3,
+           ::py::arg("ply_radius") = ::py::none(), ::py::arg("ply_twist") = 0.5,
+           ::py::arg("fiber_count") = 40, ::py::arg("fiber_twist") = -0.35,
            ::py::arg("yarn_radius") = 0.75)
       .def_static("packed_radius", &PlyParams::packed_radius, ::py::arg("ply_count"),
-                  "Radius (in yarn radii) of ply_count equal touching plies: sin(pi/n) / (1 + sin(pi/n)); 1 for "
+                  "Radius (in yarn radii) of ply_count equal touching plies: sin(pi/n) / (1 + "
+                  "sin(pi/n)); 1 for "
                   "n = 1.")
       .def_property_readonly("ply_count", [](const PlyProfile& p) { return p.params().ply_count; })
-      .def_property_readonly("ply_radius", [](const PlyProfile& p) { return p.params().ply_radius; })
+      .def_property_readonly("ply_radius",
+                             [](const PlyProfile& p) { return p.params().ply_radius; })
       .def_property_readonly("ply_twist", [](const PlyProfile& p) { return p.params().ply_twist; })
-      .def_property_readonly("fiber_count", [](const PlyProfile& p) { return p.params().fiber_count; })
-      .def_property_readonly("fiber_twist", [](const PlyProfile& p) { return p.params().fiber_twist; })
-      .def_property_readonly("yarn_radius", [](const PlyProfile& p) { return p.params().yarn_radius; })
+      .def_property_readonly("fiber_count",
+                             [](const PlyProfile& p) { return p.params().fiber_count; })
+      .def_property_readonly("fiber_twist",
+                             [](const PlyProfile& p) { return p.params().fiber_twist; })
+      .def_property_readonly("yarn_radius",
+                             [](const PlyProfile& p) { return p.params().yarn_radius; })
       .def("params", &ply_kwargs, "The keyword arguments that rebuild this profile, as a dict.")
       .def_property_readonly(
           "kernel_params",
@@ -952,8 +1005,10 @@ Invalid values raise ValueError with the C++ message naming the field.)doc")
             d["yarn_radius"] = q.yarn_radius;
             return d;
           },
-          "Derived kernel parameters: ply_center, ply_rate (radians of ply phase per unit of s), fiber_ring "
-          "(fibres on a ply's outer ring; 0: no fibre profile), fiber_radius, fiber_center (ply radii), "
+          "Derived kernel parameters: ply_center, ply_rate (radians of ply phase per unit of s), "
+          "fiber_ring "
+          "(fibres on a ply's outer ring; 0: no fibre profile), fiber_radius, fiber_center (ply "
+          "radii), "
           "fiber_rate, ...")
       .def_property_readonly_static(
           "table_bytes", [](::py::object) { return PlyProfile::table_bytes(); },
@@ -965,10 +1020,15 @@ Invalid values raise ValueError with the C++ message naming the field.)doc")
             std::copy(p.table().begin(), p.table().end(), a.mutable_data());
             return a;
           },
-          "The profile table as a float32 array of shape (3, 256) (a copy): channel 0 ply shadow, 1 ply normal "
-          "tilt (radians), 2 fibre shadow, each over one period at warped abscissae (docs/bsdf.md).")
+          "The profile table as a float32 array of shape (3, 256) (a copy): channel 0 ply shadow, "
+          "1 ply normal "
+          "tilt (radians), 2 fibre shadow, each over one period at warped abscissae "
+          "(docs/bsdf.md).")
       .def(
-          "lookup", [](const PlyProfile& p, ::py::handle phi, ::py::handle s) { return ply_eval(p, phi, s, true); },
+          "lookup",
+          [](const PlyProfile& p, ::py::handle phi, ::py::handle s) {
+            return ply_eval(p, phi, s, true);
+          },
           ::py::arg("phi"), ::py::arg("s"), R"doc(
 Table lookup at azimuth phi (radians around the yarn, increasing towards +y
 of the local frame) and arc length s (pattern units), each a number or a 1-D
@@ -977,21 +1037,26 @@ fiber_shadow), ply_shadow, fiber_shadow (N,), and the perturbed frame in the
 yarn's local frame (x tangent, z normal): normal, tangent, bitangent (N, 3).)doc")
       .def(
           "procedural",
-          [](const PlyProfile& p, ::py::handle phi, ::py::handle s) { return ply_eval(p, phi, s, false); },
-          ::py::arg("phi"), ::py::arg("s"), "As lookup(), computed in closed form (what the OSL shader runs).")
+          [](const PlyProfile& p, ::py::handle phi, ::py::handle s) {
+            return ply_eval(p, phi, s, false);
+          },
+          ::py::arg("phi"), ::py::arg("s"),
+          "As lookup(), computed in closed form (what the OSL shader runs).")
       .def("__repr__",
            [](const PlyProfile& p) {
              const PlyParams& q = p.params();
-             return "knitshade.PlyProfile(ply_count=" + std::to_string(q.ply_count) + ", ply_radius=" +
-                    num(q.ply_radius) + ", ply_twist=" + num(q.ply_twist) + ", fiber_count=" +
-                    std::to_string(q.fiber_count) + ", fiber_twist=" + num(q.fiber_twist) +
-                    ", yarn_radius=" + num(q.yarn_radius) + ")";
+             return "knitshade.PlyProfile(ply_count=" + std::to_string(q.ply_count) +
+                    ", ply_radius=" + num(q.ply_radius) + ", ply_twist=" + num(q.ply_twist) +
+                    ", fiber_count=" + std::to_string(q.fiber_count) +
+                    ", fiber_twist=" + num(q.fiber_twist) + ", yarn_radius=" + num(q.yarn_radius) +
+                    ")";
            })
       .def(::py::pickle([](const PlyProfile& p) { return ply_kwargs(p); },
                         [](const ::py::dict& d) {
-                          return make_ply(d["ply_count"].cast<int>(), d["ply_radius"], d["ply_twist"].cast<double>(),
-                                          d["fiber_count"].cast<int>(), d["fiber_twist"].cast<double>(),
-                                          d["yarn_radius"].cast<double>());
+                          return make_ply(
+                              d["ply_count"].cast<int>(), d["ply_radius"],
+                              d["ply_twist"].cast<double>(), d["fiber_count"].cast<int>(),
+                              d["fiber_twist"].cast<double>(), d["yarn_radius"].cast<double>());
                         }));
 
   const char* hit_doc = R"doc(
@@ -1025,36 +1090,49 @@ CAPM ray) or 'multi_scale' (footprint aggregation, p_delta, LEAN-widened
 roughness, mixed colours). capm=False: no parallax, the height query at the
 hit's (u, v). uv_scale: pattern units per UV unit. max_steps, max_segment,
 max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc")
-      .def(::py::init(&make_material), ::py::arg("pattern"), ::py::arg("stitch") = StitchParams{}, ::py::kw_only(),
-           ::py::arg("bsdf") = ::py::none(), ::py::arg("ply") = ::py::none(), ::py::arg("mode") = "near_field",
-           ::py::arg("capm") = true, ::py::arg("ply_detail") = true, ::py::arg("footprint_points") = 16,
-           ::py::arg("uv_scale") = 40.0, ::py::arg("max_steps") = 32, ::py::arg("max_segment") = 6.2832,
-           ::py::arg("max_bend") = 0.05)
-      .def_property_readonly("pattern", [](const KnitMaterial& km) { return km.surface().pattern(); })
+      .def(::py::init(&make_material), ::py::arg("pattern"), ::py::arg("stitch") = StitchParams{},
+           ::py::kw_only(), ::py::arg("bsdf") = ::py::none(), ::py::arg("ply") = ::py::none(),
+           ::py::arg("mode") = "near_field", ::py::arg("capm") = true,
+           ::py::arg("ply_detail") = true, ::py::arg("footprint_points") = 16,
+           ::py::arg("uv_scale") = 40.0, ::py::arg("max_steps") = 32,
+           ::py::arg("max_segment") = 6.2832, ::py::arg("max_bend") = 0.05)
+      .def_property_readonly("pattern",
+                             [](const KnitMaterial& km) { return km.surface().pattern(); })
       .def_property_readonly("stitch", [](const KnitMaterial& km) { return km.params().stitch; })
-      .def_property_readonly("bsdf", [](const KnitMaterial& km) { return km.bsdf(); },
-                             "The material's YarnBSDF (a copy).")
-      .def_property_readonly("ply", [](const KnitMaterial& km) { return km.ply(); },
-                             "The material's PlyProfile (a copy).")
-      .def_property_readonly("mode", [](const KnitMaterial& km) { return mode_name(km.params().mode); })
+      .def_property_readonly(
+          "bsdf", [](const KnitMaterial& km) { return km.bsdf(); },
+          "The material's YarnBSDF (a copy).")
+      .def_property_readonly(
+          "ply", [](const KnitMaterial& km) { return km.ply(); },
+          "The material's PlyProfile (a copy).")
+      .def_property_readonly("mode",
+                             [](const KnitMaterial& km) { return mode_name(km.params().mode); })
       .def_property_readonly("capm", [](const KnitMaterial& km) { return km.params().capm; })
-      .def_property_readonly("ply_detail", [](const KnitMaterial& km) { return km.params().ply_detail; })
-      .def_property_readonly("footprint_points", [](const KnitMaterial& km) { return km.params().footprint_points; })
-      .def_property_readonly("uv_scale", [](const KnitMaterial& km) { return km.params().uv_scale; })
-      .def_property_readonly("shell_top", [](const KnitMaterial& km) { return km.surface().shell_top(); },
-                             "Height of the shell top (the base mesh) above the yarn centre plane, pattern "
-                             "units.")
-      .def_property_readonly("state_bytes", &KnitMaterial::state_bytes,
-                             "Memory the model keeps: pattern arrays, ply table, parameters (bytes).")
+      .def_property_readonly("ply_detail",
+                             [](const KnitMaterial& km) { return km.params().ply_detail; })
+      .def_property_readonly("footprint_points",
+                             [](const KnitMaterial& km) { return km.params().footprint_points; })
+      .def_property_readonly("uv_scale",
+                             [](const KnitMaterial& km) { return km.params().uv_scale; })
+      .def_property_readonly(
+          "shell_top", [](const KnitMaterial& km) { return km.surface().shell_top(); },
+          "Height of the shell top (the base mesh) above the yarn centre plane, pattern "
+          "units.")
+      .def_property_readonly(
+          "state_bytes", &KnitMaterial::state_bytes,
+          "Memory the model keeps: pattern arrays, ply table, parameters (bytes).")
       .def(
           "shade",
-          [](const KnitMaterial& km, ::py::handle u, ::py::handle v, ::py::handle ray_dir, ::py::handle t,
-             ::py::handle b, ::py::handle n, ::py::handle ppw, ::py::handle kx, ::py::handle ky,
-             ::py::handle footprint, ::py::handle shift, const FrameProvider* frame) {
-            return material_shade(km, hit_args(km, u, v, ray_dir, t, b, n, ppw, kx, ky, footprint, shift, frame));
+          [](const KnitMaterial& km, ::py::handle u, ::py::handle v, ::py::handle ray_dir,
+             ::py::handle t, ::py::handle b, ::py::handle n, ::py::handle ppw, ::py::handle kx,
+             ::py::handle ky, ::py::handle footprint, ::py::handle shift,
+             const FrameProvider* frame) {
+            return material_shade(
+                km, hit_args(km, u, v, ray_dir, t, b, n, ppw, kx, ky, footprint, shift, frame));
           },
-          ::py::arg("u"), ::py::arg("v"), ::py::arg("ray_dir"), ::py::kw_only(), ::py::arg("t") = ::py::none(),
-          ::py::arg("b") = ::py::none(), ::py::arg("n") = ::py::none(), ::py::arg("pattern_per_world") = 1.0,
+          ::py::arg("u"), ::py::arg("v"), ::py::arg("ray_dir"), ::py::kw_only(),
+          ::py::arg("t") = ::py::none(), ::py::arg("b") = ::py::none(),
+          ::py::arg("n") = ::py::none(), ::py::arg("pattern_per_world") = 1.0,
           ::py::arg("kx") = 0.0, ::py::arg("ky") = 0.0, ::py::arg("footprint") = ::py::none(),
           ::py::arg("shift") = std::vector<double>{0.5, 0.5}, ::py::arg("frame") = nullptr,
           (std::string(R"doc(
@@ -1076,14 +1154,16 @@ transmittance() in every row).)doc") +
               .c_str())
       .def(
           "transmittance",
-          [](const KnitMaterial& km, ::py::handle u, ::py::handle v, ::py::handle ray_dir, ::py::handle t,
-             ::py::handle b, ::py::handle n, ::py::handle ppw, ::py::handle kx, ::py::handle ky,
-             ::py::handle footprint, ::py::handle shift, const FrameProvider* frame) {
+          [](const KnitMaterial& km, ::py::handle u, ::py::handle v, ::py::handle ray_dir,
+             ::py::handle t, ::py::handle b, ::py::handle n, ::py::handle ppw, ::py::handle kx,
+             ::py::handle ky, ::py::handle footprint, ::py::handle shift,
+             const FrameProvider* frame) {
             return material_transmittance(
                 km, hit_args(km, u, v, ray_dir, t, b, n, ppw, kx, ky, footprint, shift, frame));
           },
-          ::py::arg("u"), ::py::arg("v"), ::py::arg("ray_dir"), ::py::kw_only(), ::py::arg("t") = ::py::none(),
-          ::py::arg("b") = ::py::none(), ::py::arg("n") = ::py::none(), ::py::arg("pattern_per_world") = 1.0,
+          ::py::arg("u"), ::py::arg("v"), ::py::arg("ray_dir"), ::py::kw_only(),
+          ::py::arg("t") = ::py::none(), ::py::arg("b") = ::py::none(),
+          ::py::arg("n") = ::py::none(), ::py::arg("pattern_per_world") = 1.0,
           ::py::arg("kx") = 0.0, ::py::arg("ky") = 0.0, ::py::arg("footprint") = ::py::none(),
           ::py::arg("shift") = std::vector<double>{0.5, 0.5}, ::py::arg("frame") = nullptr,
           (std::string(R"doc(
@@ -1094,9 +1174,10 @@ p_delta.)doc") +
               .c_str())
       .def("__repr__", [](const KnitMaterial& km) {
         const Pattern& p = km.surface().pattern();
-        return "<knitshade.KnitMaterial " + std::to_string(p.rows()) + "x" + std::to_string(p.cols()) + " " +
-               mode_name(km.params().mode) + (km.params().capm ? "" : " no-capm") + " uv_scale=" +
-               num(km.params().uv_scale) + ">";
+        return "<knitshade.KnitMaterial " + std::to_string(p.rows()) + "x" +
+               std::to_string(p.cols()) + " " + mode_name(km.params().mode) +
+               (km.params().capm ? "" : " no-capm") + " uv_scale=" + num(km.params().uv_scale) +
+               ">";
       });
 }
 
