@@ -10,4 +10,5 @@ PYBIND11_MODULE(knitshade, m) {
   m.attr("__version__") = knit::version();
   knit::py::bind_pattern(m);
   knit::py::bind_geometry(m);
+  knit::py::bind_appearance(m);
 }
