@@ -29,7 +29,13 @@
  *
  * Slopes of grazing normals are clamped at KNIT_MS_MAX_SLOPE (normal z >=
  * 0.24): the LEAN covariance of a field of round tubes is otherwise dominated
- * by a few silhouette samples. */
+ * by a few silhouette samples. Seen from behind, slopes are taken against
+ * -z, the side the hits face.
+ *
+ * Colours: color_w is a histogram over the first KNIT_MS_COLORS indices
+ * (enough for most patterns; the host mixes its palette with it); for any
+ * number of colours, color_pick is the colour of one hit chosen from the
+ * shift, so that over a pixel's samples colours mix in proportion. */
 #ifndef KNIT_KERNEL_MULTISCALE_H
 #define KNIT_KERNEL_MULTISCALE_H
 
@@ -47,6 +53,7 @@ KNIT_STRUCT(KnitAggregate)
   float layers;     /* mean tube count under the hits */
   float steps;      /* mean CAPM segments per point */
   float color_w[KNIT_MS_COLORS]; /* share of hits per colour index (last bin: >= 7) */
+  int color_pick;   /* colour index of one hit chosen by the shift (any index; -1 if none) */
   kvec3 position;   /* mean hit position (pattern space) */
 KNIT_STRUCT_END(KnitAggregate)
 
@@ -99,12 +106,20 @@ KNIT_FN KnitAggregate knit_aggregate(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_AR
   kvec3 tsum = kv3(KF(0.0), KF(0.0), KF(0.0));
   kvec3 psum = kv3(KF(0.0), KF(0.0), KF(0.0));
   float lsum = KF(0.0), ssum = KF(0.0);
+  float side = KZ(wi_local) < KF(0.0) ? KF(-1.0) : KF(1.0);
+  int pick = -1;
   if (stratified != 0) {
     float cells = KFLT(ncx) * KFLT(ncy);
     n = k_mini(KNIT_MS_MAX_POINTS, n * k_maxi(1, KINT(k_ceil(cells / KF(16.0)))));
   }
   a.points = n;
   a.hits = 0;
+  {
+    /* which hit gives color_pick: a fraction of the (unknown) hit count */
+    float pf = knit_frac(shift_x * KF(7.0) + shift_y * KF(3.0) + KF(0.5));
+    pick = KINT(k_floor(pf * KFLT(n)));
+  }
+  a.color_pick = -1;
   for (c = 0; c < KNIT_MS_COLORS; c++) a.color_w[c] = KF(0.0);
   for (i = 0; i < n; i++) {
     kvec3 q = knit_sobol2(i);
@@ -127,11 +142,12 @@ KNIT_FN KnitAggregate knit_aggregate(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_AR
     if (st.state == KNIT_CAPM_HIT) {
       kvec3 nn = st.hit.n;
       kvec3 tt = st.hit.tangent;
-      float nz = k_fmax(KZ(nn), KF(1.0) / k_sqrt(KF(1.0) + KNIT_MS_MAX_SLOPE * KNIT_MS_MAX_SLOPE));
+      float nz = k_fmax(side * KZ(nn), KF(1.0) / k_sqrt(KF(1.0) + KNIT_MS_MAX_SLOPE * KNIT_MS_MAX_SLOPE));
       float bx = k_clampf(KX(nn) / nz, -KNIT_MS_MAX_SLOPE, KNIT_MS_MAX_SLOPE);
       float by = k_clampf(KY(nn) / nz, -KNIT_MS_MAX_SLOPE, KNIT_MS_MAX_SLOPE);
       int ci = k_mini(k_maxi(st.hit.colour, 0), KNIT_MS_COLORS - 1);
       a.hits = a.hits + 1;
+      if (a.color_pick < 0 || i <= pick) a.color_pick = st.hit.colour;
       nsum = kv3_add(nsum, nn);
       /* Tangents are lines, not arrows: align each with the running sum. */
       tsum = kv3_dot(tsum, tt) < KF(0.0) ? kv3_sub(tsum, tt) : kv3_add(tsum, tt);

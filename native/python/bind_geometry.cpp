@@ -202,7 +202,7 @@ class PyKnitSurface {
     const Vec3 ex = vec2(fx, "footprint_x"), ey = vec2(fy, "footprint_y");
     if (wi.ndim() != 1 || wi.shape(0) != 3) throw ::py::value_error("wi_local must have shape (3,)");
     check_finite("wi_local", wi.data(), 3);
-    if (!(wi.data()[2] > 0)) throw ::py::value_error("wi_local must point away from the surface (z > 0)");
+    if (wi.data()[2] == 0) throw ::py::value_error("wi_local must not be tangent to the surface (z != 0)");
     if (n_points < 1 || n_points > KNIT_MS_MAX_POINTS)
       throw ::py::value_error("n_points must be in [1, " + std::to_string(KNIT_MS_MAX_POINTS) + "], got " +
                               std::to_string(n_points));
@@ -371,7 +371,8 @@ Multi-scale aggregation over a pixel footprint (paper Sec. 5.1, 6.2) at UV
 points: footprint_x = (du/dx, dv/dx) and footprint_y = (du/dy, dv/dy) span the
 footprint in UV (scaled by uv_scale to pattern space); n_points Sobol' points
 (more for footprints over 16 cells, up to 64), shifted by (shift_x, shift_y),
-are marched with CAPM along -wi_local on a base of curvature (kx, ky).
+are marched with CAPM along -wi_local (normalised; z < 0 views the fabric
+from behind) on a base of curvature (kx, ky).
 Returns a dict of arrays: p_delta (pass-through probability), normal and
 tangent (N,3, means), sigma (N,3: LEAN slope covariance xx, xy, yy), layers,
 steps (mean CAPM segments), points, hits, color_weights (N,8).)doc");

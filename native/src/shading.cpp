@@ -37,6 +37,18 @@ void curved_frame(Vec3 t0, Vec3 b0, Vec3 n0, float kx, float ky, float dx, float
   n = k::kv3_add(k::kv3_scale(b0, sy), k::kv3_scale(n1, cy));
 }
 
+// The ply profile of a material: its parameters must be valid when the
+// detail is on; when it is off, invalid ones fall back to the defaults.
+PlyProfile ply_profile_for(const KnitMaterialParams& p) {
+  if (p.ply_detail) return PlyProfile(p.ply);
+  try {
+    p.ply.validate();
+  } catch (const std::invalid_argument&) {
+    return PlyProfile();
+  }
+  return PlyProfile(p.ply);
+}
+
 }  // namespace
 
 void KnitMaterialParams::validate() const {
@@ -59,13 +71,13 @@ void KnitMaterialParams::validate() const {
 }
 
 KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
-    : pattern_(std::move(pattern)),
-      params_((params.validate(), std::move(params))),
-      surface_(pattern_, params_.stitch),
+    : params_((params.validate(), std::move(params))),
+      surface_(std::move(pattern), params_.stitch),
       bsdf_(params_.bsdf),
-      ply_(params_.ply) {
-  if (pattern_.num_colors() > params_.bsdf.num_colors())
-    throw std::invalid_argument("KnitMaterialParams.bsdf: the pattern uses " + std::to_string(pattern_.num_colors()) +
+      ply_(ply_profile_for(params_)) {
+  const Pattern& pat = surface_.pattern();
+  if (pat.num_colors() > params_.bsdf.num_colors())
+    throw std::invalid_argument("KnitMaterialParams.bsdf: the pattern uses " + std::to_string(pat.num_colors()) +
                                 " colour indices but " + std::to_string(params_.bsdf.num_colors()) +
                                 " yarn colours are given");
   // Mean arc length per unit of curve parameter, over one stitch of knit.
@@ -84,9 +96,14 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
 }
 
 size_t KnitMaterial::state_bytes() const {
-  return sizeof(*this) + pattern_.codes().size() * sizeof(int32_t) +
-         pattern_.colors_or_zero().size() * sizeof(int32_t) + PlyProfile::table_bytes() +
-         2 * sizeof(Rgb) * size_t(params_.bsdf.num_colors());
+  // The object itself (parameters, the ply table) and what it keeps on the
+  // heap: the pattern arrays (held by its surface) and the colour palettes
+  // (in the material's and the BSDF's parameters).
+  auto heap = [](const Pattern& p) {
+    return (p.codes().size() + p.colors_or_zero().size() + (p.has_colors() ? p.codes().size() : 0)) *
+           sizeof(int32_t);
+  };
+  return sizeof(*this) + heap(surface_.pattern()) + 4 * sizeof(Rgb) * size_t(params_.bsdf.num_colors());
 }
 
 k::KnitCapm KnitMaterial::march(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame) const {
@@ -101,6 +118,26 @@ k::KnitCapm KnitMaterial::march(const BaseHit& hit, Vec3 ray_dir, const FramePro
   const float seg = kmax > 0 ? std::min(o.max_segment, o.max_bend / kmax) : o.max_segment;
   return k::knit_capm_march_curved(surface_.geom(), surface_.codes(), surface_.colors(), start, x, y,
                                    k::kv3_neg(k::kv3_normalize(wi)), kx, ky, seg, o.max_steps);
+}
+
+void KnitMaterial::mix_colors(KnitShade& sh, const float* weights) const {
+  const YarnBsdfParams& bp = params_.bsdf;
+  Rgb r{0, 0, 0}, t{0, 0, 0};
+  float best = -1;
+  for (int c = 0; c < std::min(KNIT_MS_COLORS, bp.num_colors()); ++c) {
+    const float w = weights[c];
+    if (w <= 0) continue;
+    const Rgb& kr = bp.reflect_colors[size_t(c)];
+    const Rgb& kt = bp.transmit_colors[size_t(c)];
+    r = {r.r + w * kr.r, r.g + w * kr.g, r.b + w * kr.b};
+    t = {t.r + w * kt.r, t.g + w * kt.g, t.b + w * kt.b};
+    if (w > best) {
+      best = w;
+      sh.point.color = c;
+    }
+  }
+  sh.kd_r = r;
+  sh.kd_t = t;
 }
 
 void KnitMaterial::set_colors(KnitShade& sh, int color_index) const {
@@ -124,36 +161,29 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
 
   if (params_.mode == KnitMode::MultiScale) {
     const float us = params_.uv_scale;
+    // The footprint's points share the frame at the hit; a frame field
+    // contributes its curvature there (pattern units).
+    const Vec3 kap = frame ? frame->curvature(x, y) : k::kv3(hit.kx / S, hit.ky / S, 0);
     const k::KnitAggregate a = k::knit_aggregate(
         surface_.geom(), surface_.codes(), surface_.colors(), x, y, k::kv3(us * hit.dudx, us * hit.dvdx, 0),
-        k::kv3(us * hit.dudy, us * hit.dvdy, 0), wi, params_.footprint_points, shift[0], shift[1], hit.kx / S,
-        hit.ky / S, params_.capm_options.max_segment, params_.capm_options.max_steps);
+        k::kv3(us * hit.dudy, us * hit.dvdy, 0), wi, params_.footprint_points, shift[0], shift[1], kap.x,
+        kap.y, params_.capm_options.max_segment, params_.capm_options.max_steps);
     sh.steps = int(a.steps * float(a.points) + 0.5f);
-    if (a.hits == 0) return sh;
+    if (a.hits == 0) {
+      sh.point.p_delta = 1;
+      return sh;
+    }
     sh.pass_through = false;
     sh.point.p_delta = a.p_delta;
     sh.point.layers = std::max(1, int(std::lround(a.layers)));
     sh.point.shadow = mean_shadow_;
-    // Mixed body colour over the footprint's colour indices.
-    Rgb r{0, 0, 0}, t{0, 0, 0};
-    float best = -1;
-    for (int c = 0; c < KNIT_MS_COLORS; ++c) {
-      const float w = a.color_w[c];
-      if (w <= 0) continue;
-      const int ci = std::min(c, bp.num_colors() - 1);
-      r.r += w * bp.reflect_colors[size_t(ci)].r;
-      r.g += w * bp.reflect_colors[size_t(ci)].g;
-      r.b += w * bp.reflect_colors[size_t(ci)].b;
-      t.r += w * bp.transmit_colors[size_t(ci)].r;
-      t.g += w * bp.transmit_colors[size_t(ci)].g;
-      t.b += w * bp.transmit_colors[size_t(ci)].b;
-      if (w > best) {
-        best = w;
-        sh.point.color = ci;
-      }
+    // Body colour: the palette mixed by the footprint's colour histogram, or
+    // (more colours than the histogram has bins) the colour of one hit.
+    if (bp.num_colors() > KNIT_MS_COLORS) {
+      set_colors(sh, a.color_pick);
+    } else {
+      mix_colors(sh, a.color_w);
     }
-    sh.kd_r = r;
-    sh.kd_t = t;
     // Shading frame: mean normal, mean tangent made orthogonal to it; then the
     // LEAN covariance, rotated into that frame, widens the specular lobes.
     const Vec3 n = k::kv3_normalize(a.n);
@@ -166,13 +196,24 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     const float syy = s * s * a.sxx - 2 * c * s * a.sxy + c * c * a.syy;
     const float sxy = (c * c - s * s) * a.sxy + c * s * (a.syy - a.sxx);
     const k::KLeanRoughness lr = k::bsdf_lean_to_ggx(bp.roughness_x, bp.roughness_y, sxx, sxy, syy);
-    const k::KLeanRoughness lt = k::bsdf_lean_to_ggx(bp.trans_roughness_x, bp.trans_roughness_y, sxx, sxy, syy);
     const Vec3 bt = k::kv3_cross(n, tg);
     const Vec3 tu = k::kv3_add(k::kv3_scale(tg, std::cos(lr.angle)), k::kv3_scale(bt, std::sin(lr.angle)));
     sh.spec_r = k::bsdf_mf_make(std::min(lr.alpha_u, 1.0f), std::min(lr.alpha_v, 1.0f), bp.eta);
-    // The transmission lobe shares the reflection lobe's rotated axes; its
-    // widened roughness uses the same covariance.
-    sh.spec_t = k::bsdf_mf_make(std::min(lt.alpha_u, 1.0f), std::min(lt.alpha_v, 1.0f), bp.eta);
+    // The transmission lobe shares the shading frame, whose axes are the
+    // reflection lobe's principal axes. Its own widened roughness has its own
+    // principal axes; its two roughnesses go to the frame axes nearer to them
+    // (within 45 degrees), so an anisotropic lobe is never turned by 90.
+    {
+      const k::KLeanRoughness lt =
+          k::bsdf_lean_to_ggx(bp.trans_roughness_x, bp.trans_roughness_y, sxx, sxy, syy);
+      float d = lt.angle - lr.angle;
+      const float half_pi = 1.57079633f;
+      while (d > half_pi) d -= 2 * half_pi;
+      while (d <= -half_pi) d += 2 * half_pi;
+      const bool swap = std::abs(d) > 0.5f * half_pi;
+      const float au = swap ? lt.alpha_v : lt.alpha_u, av = swap ? lt.alpha_u : lt.alpha_v;
+      sh.spec_t = k::bsdf_mf_make(std::min(au, 1.0f), std::min(av, 1.0f), bp.eta);
+    }
     const Vec3 local_t = tu, local_n = n, local_b = k::kv3_cross(n, tu);
     sh.st = to_world(local_t, hit.t, hit.b, hit.n);
     sh.sb = to_world(local_b, hit.t, hit.b, hit.n);
@@ -187,14 +228,20 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
   if (params_.capm) {
     const k::KnitCapm st = march(hit, ray_dir, frame);
     sh.steps = st.steps;
-    if (st.state != KNIT_CAPM_HIT) return sh;
+    if (st.state != KNIT_CAPM_HIT) {
+      sh.point.p_delta = 1;
+      return sh;
+    }
     h = st.hit;
   } else {
     const Vec3 o = k::kv3(x, y, sh.from_back ? -top - 0.01f : top + 0.01f);
     h = k::knit_line_query(surface_.geom(), surface_.codes(), surface_.colors(), o,
                            k::kv3(0, 0, sh.from_back ? 1.0f : -1.0f), 0, 2 * top + 0.02f, 0);
     sh.steps = 1;
-    if (!h.hit) return sh;
+    if (!h.hit) {
+      sh.point.p_delta = 1;
+      return sh;
+    }
     // Without parallax the hit is where the ray met the mesh.
     h.p = k::kv3(x, y, h.p.z);
   }

@@ -208,3 +208,34 @@ TEST(MultiScale, DefaultPointCountIsAccurateEnough) {
 }
 
 }  // namespace
+
+namespace {
+
+// Regression: seen from behind, slopes were taken against +z, so the
+// downward-facing hits were all clamped. The seed pattern's back is its front
+// shifted, so both sides must give the same slope spread.
+TEST(MultiScale, BackViewSlopesMatchFrontView) {
+  using namespace knit;
+  KnitSurface s(test::seed(), StitchParams{});
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<float> U(0, 1);
+  double front[2] = {0, 0}, back[2] = {0, 0};
+  const float size = 4 * 6.2832f;
+  for (int i = 0; i < 24; ++i) {
+    const float x = 200 * U(rng), y = 200 * U(rng), sx = U(rng), sy = U(rng);
+    const k::KnitAggregate f = k::knit_aggregate(s.geom(), s.codes(), s.colors(), x, y, k::kv3(size, 0, 0),
+                                                 k::kv3(0, size, 0), k::kv3(0, 0, 1), 32, sx, sy, 0, 0, 6.2832f, 32);
+    const k::KnitAggregate b = k::knit_aggregate(s.geom(), s.codes(), s.colors(), x, y, k::kv3(size, 0, 0),
+                                                 k::kv3(0, size, 0), k::kv3(0, 0, -1), 32, sx, sy, 0, 0, 6.2832f, 32);
+    front[0] += f.sxx;
+    front[1] += f.syy;
+    back[0] += b.sxx;
+    back[1] += b.syy;
+  }
+  for (int c = 0; c < 2; ++c) {
+    EXPECT_GT(back[c] / front[c], 0.75) << c;
+    EXPECT_LT(back[c] / front[c], 1.33) << c;
+  }
+}
+
+}  // namespace

@@ -171,3 +171,66 @@ TEST(Shading, ParamsValidationNamesTheField) {
 }
 
 }  // namespace
+
+namespace {
+
+using namespace knit;
+
+// Regression: the multi-scale transmission lobe kept its own roughnesses but
+// took the reflection lobe's axes, turning an anisotropic lobe by 90 degrees.
+TEST(Shading, MultiScaleTransmissionLobeKeepsItsOrientation) {
+  KnitMaterialParams mp;
+  mp.uv_scale = 1;
+  mp.ply_detail = false;
+  mp.mode = KnitMode::MultiScale;
+  mp.bsdf.roughness_x = 0.5f;
+  mp.bsdf.roughness_y = 0.2f;
+  mp.bsdf.trans_roughness_x = 0.3f;
+  mp.bsdf.trans_roughness_y = 0.6f;
+  KnitMaterial m(test::stockinette(), mp);
+  int n = 0;
+  for (float u = 1; u < 40; u += 0.37f) {
+    BaseHit bh;
+    bh.u = u;
+    bh.v = 0.61f * u;
+    bh.dudx = bh.dvdy = 1e-5f;  // a point: no footprint widening
+    const KnitShade sh = m.shade(bh, k::kv3(0, 0, -1), nullptr, {0.3f, 0.6f});
+    if (sh.pass_through) continue;
+    ++n;
+    EXPECT_NEAR(sh.spec_r.alpha_x, 0.5f, 1e-3f);
+    EXPECT_NEAR(sh.spec_r.alpha_y, 0.2f, 1e-3f);
+    EXPECT_NEAR(sh.spec_t.alpha_x, 0.3f, 1e-3f);
+    EXPECT_NEAR(sh.spec_t.alpha_y, 0.6f, 1e-3f);
+  }
+  EXPECT_GT(n, 50);
+}
+
+// Regression: multi-scale colours of indices past the histogram's 8 bins all
+// showed colour 7; they now come from one hit of the footprint.
+TEST(Shading, MultiScaleShowsColourIndicesPastEight) {
+  std::vector<std::vector<int>> codes(10, std::vector<int>(1, 0)), colors(10, std::vector<int>(1, 0));
+  for (int r = 0; r < 10; ++r) colors[size_t(r)][0] = r;
+  KnitMaterialParams mp;
+  mp.uv_scale = 1;
+  mp.mode = KnitMode::MultiScale;
+  mp.bsdf.reflect_colors.clear();
+  for (int c = 0; c < 10; ++c) mp.bsdf.reflect_colors.push_back(Rgb{c / 10.f, 0, 0});
+  mp.bsdf.transmit_colors = mp.bsdf.reflect_colors;
+  KnitMaterial m(Pattern::from_rows(codes, colors), mp);
+  std::vector<int> seen(10, 0);
+  for (int i = 0; i < 400; ++i) {
+    BaseHit bh;
+    bh.u = 3.1f;
+    bh.v = 0.45f * float(i % 100);  // rows 0..9 of the repeat, from the top
+    bh.dudx = bh.dvdy = 0.01f;
+    const KnitShade sh = m.shade(bh, k::kv3(0, 0, -1), nullptr, {0.37f * float(i % 7) / 7, 0.5f});
+    if (sh.pass_through) continue;
+    ASSERT_GE(sh.point.color, 0);
+    ASSERT_LT(sh.point.color, 10);
+    EXPECT_NEAR(sh.kd_r.r, sh.point.color / 10.f, 1e-6f);
+    seen[size_t(sh.point.color)]++;
+  }
+  for (int c = 0; c < 10; ++c) EXPECT_GT(seen[size_t(c)], 0) << "colour " << c << " never shown";
+}
+
+}  // namespace

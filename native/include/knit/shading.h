@@ -2,7 +2,7 @@
 // mesh it runs the geometry (CAPM or the flat height query, near-field or
 // multi-scale) and returns what shading needs: pass straight through, or a
 // yarn shading frame, the BSDF point (colour, layers, ply shadow, p_delta) and
-// the kernel BSDF to evaluate there. docs/renderer-integration.md.
+// the kernel BSDF to evaluate there. docs/renderer.md, docs/multiscale.md.
 //
 // Conventions. The base mesh is the top of the yarn shell (paper Sec. 3.3,
 // Alg. 1): a ray hitting the mesh from the front enters pattern space at
@@ -49,7 +49,7 @@ struct BaseHit {
 };
 
 struct KnitShade {
-  bool pass_through = true;  // no yarn on this ray: continue straight on
+  bool pass_through = true;  // no yarn on this ray: continue straight on (point.p_delta = 1)
   bool from_back = false;    // the ray reached the fabric from behind the mesh
   Vec3 st{}, sb{}, sn{};     // world shading frame: yarn tangent, bitangent, surface normal
   Vec3 offset{};             // world offset from the base hit to the yarn hit
@@ -90,8 +90,9 @@ class KnitMaterial {
  private:
   k::KnitCapm march(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame) const;
   void set_colors(KnitShade& sh, int color_index) const;
+  // Palette mixed by a footprint's colour histogram (KNIT_MS_COLORS bins).
+  void mix_colors(KnitShade& sh, const float* weights) const;
 
-  Pattern pattern_;
   KnitMaterialParams params_;
   KnitSurface surface_;
   YarnBsdf bsdf_;
