@@ -144,21 +144,31 @@ KNIT_FN float knit_newton_closest(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, k
   return t;
 }
 
+/* A curve point found by a Newton search, with its relation to the line. */
+KNIT_STRUCT(KExtreme)
+  float t;
+  KCurve cv;
+  KLineRel lr;
+KNIT_STRUCT_END(KExtreme)
+
 /* Maximise sgn * s(t) + w(t), w = sqrt(r^2 - rho^2): sgn = -1 gives the entry,
  * +1 the exit. Safeguarded Newton: a step that leaves the tube (rho >= r) or
- * lowers the objective is halved. Returns t; the caller re-evaluates. */
-KNIT_FN float knit_newton_extreme(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, kvec3 o, kvec3 D,
-                                  float t_start, float sgn, int iters) {
-  float t = t_start;
+ * lowers the objective is halved. Returns the last point evaluated (rho may be
+ * >= r when t_start was outside the tube). */
+KNIT_FN KExtreme knit_newton_extreme(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, kvec3 o, kvec3 D,
+                                     float t_start, float sgn, int iters) {
+  KExtreme e;
   float r2 = g.r * g.r;
-  KLineRel lr = knit_line_rel(knit_row_curve_at(g, codes, rw, t), o, D);
   int i;
-  if (lr.rho2 >= r2) return t;
+  e.t = t_start;
+  e.cv = knit_row_curve_at(g, codes, rw, e.t);
+  e.lr = knit_line_rel(e.cv, o, D);
+  if (e.lr.rho2 >= r2) return e;
   for (i = 0; i < iters; i++) {
-    float w = k_sqrt(r2 - lr.rho2);
-    float f = sgn * lr.s + w;
-    float f1 = sgn * lr.sd1 - lr.phi1 / w;
-    float f2 = sgn * lr.sd2 - lr.phi2 / w - lr.phi1 * lr.phi1 / (w * w * w);
+    float w = k_sqrt(r2 - e.lr.rho2);
+    float f = sgn * e.lr.s + w;
+    float f1 = sgn * e.lr.sd1 - e.lr.phi1 / w;
+    float f2 = sgn * e.lr.sd2 - e.lr.phi2 / w - e.lr.phi1 * e.lr.phi1 / (w * w * w);
     float step;
     int tries;
     int moved = 0;
@@ -167,10 +177,12 @@ KNIT_FN float knit_newton_extreme(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, k
     step = k_clampf(step, KF(-0.25), KF(0.25));
     if (k_fabs(step) < KF(1.0e-6)) break;
     for (tries = 0; tries < 4 && moved == 0; tries++) {
-      KLineRel nl = knit_line_rel(knit_row_curve_at(g, codes, rw, t + step), o, D);
+      KCurve nc = knit_row_curve_at(g, codes, rw, e.t + step);
+      KLineRel nl = knit_line_rel(nc, o, D);
       if (nl.rho2 < r2 && sgn * nl.s + k_sqrt(r2 - nl.rho2) >= f) {
-        t = t + step;
-        lr = nl;
+        e.t = e.t + step;
+        e.cv = nc;
+        e.lr = nl;
         moved = 1;
       } else {
         step = step * KF(0.5);
@@ -178,7 +190,7 @@ KNIT_FN float knit_newton_extreme(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, k
     }
     if (moved == 0) break;
   }
-  return t;
+  return e;
 }
 
 /* The crossing of row k's tube found from curve parameter t (already near the
@@ -188,24 +200,21 @@ KNIT_FN KnitLineHit knit_crossing(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY
                                   KRow rw, kvec3 o, kvec3 D, float t_close, int need_exit) {
   KnitLineHit h = knit_line_hit_none();
   float r2 = g.r * g.r;
-  float t_in = knit_newton_extreme(g, codes, rw, o, D, t_close, KF(-1.0), KNIT_NEWTON_EXTREME);
-  KCurve ci = knit_row_curve_at(g, codes, rw, t_in);
-  KLineRel li = knit_line_rel(ci, o, D);
+  KExtreme ein = knit_newton_extreme(g, codes, rw, o, D, t_close, KF(-1.0), KNIT_NEWTON_EXTREME);
   int c;
-  if (li.rho2 >= r2) return h;
+  if (ein.lr.rho2 >= r2) return h;
   if (need_exit != 0) {
-    float t_out = knit_newton_extreme(g, codes, rw, o, D, t_close, KF(1.0), KNIT_NEWTON_EXTREME);
-    KLineRel lo = knit_line_rel(knit_row_curve_at(g, codes, rw, t_out), o, D);
-    if (lo.rho2 >= r2) return h;
-    h.s_out = lo.s + k_sqrt(r2 - lo.rho2);
+    KExtreme eout = knit_newton_extreme(g, codes, rw, o, D, t_close, KF(1.0), KNIT_NEWTON_EXTREME);
+    if (eout.lr.rho2 >= r2) return h;
+    h.s_out = eout.lr.s + k_sqrt(r2 - eout.lr.rho2);
   }
   h.hit = 1;
-  h.s_in = li.s - k_sqrt(r2 - li.rho2);
-  h.t = t_in;
+  h.s_in = ein.lr.s - k_sqrt(r2 - ein.lr.rho2);
+  h.t = ein.t;
   h.p = kv3_madd(o, D, h.s_in);
-  h.n = kv3_normalize(kv3_sub(h.p, ci.p));
-  h.tangent = kv3_normalize(ci.d1);
-  c = knit_column_of(t_in);
+  h.n = kv3_normalize(kv3_sub(h.p, ein.cv.p));
+  h.tangent = kv3_normalize(ein.cv.d1);
+  c = knit_column_of(ein.t);
   h.row = rw.k;
   h.col = c;
   h.code = codes[rw.off + k_modi(c, g.cols)];
