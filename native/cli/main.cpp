@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -52,8 +53,14 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "knitshade %s: %s\n(see `knitshade %s --help`)\n", c.name,
                      e.message.c_str(), c.name);
         return 2;
+      } catch (const std::bad_alloc&) {
+        std::fprintf(stderr, "knitshade %s: error: out of memory\n", c.name);
+        return 1;
       } catch (const std::exception& e) {
         std::fprintf(stderr, "knitshade %s: error: %s\n", c.name, e.what());
+        return 1;
+      } catch (...) {
+        std::fprintf(stderr, "knitshade %s: error: unexpected failure\n", c.name);
         return 1;
       }
     }
