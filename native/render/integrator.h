@@ -45,7 +45,8 @@ class PathIntegrator {
   // Transmittance from `origin` along unit `dir` up to `tmax` (inf for
   // infinite lights): 0 when blocked, the product of pass-through
   // transmittances otherwise.
-  Rgb shadow_transmittance(Vec3 origin, Vec3 dir, float tmax, PathStats& stats) const;
+  // Stochastic transmittances (the knit model) draw from `sampler`.
+  Rgb shadow_transmittance(Vec3 origin, Vec3 dir, float tmax, PathStats& stats, Sampler& sampler) const;
 
  private:
   const Scene& scene_;

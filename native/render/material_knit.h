@@ -1,0 +1,76 @@
+// The knit model on a base mesh (paper Sec. 4-6): knit::KnitMaterial
+// (native/include/knit/shading.h) put on one mesh of the scene.
+//
+// The base mesh is the top of the yarn shell (paper Alg. 1): a ray that hits
+// it from the front enters pattern space at (x, y, shell_top) with
+// x = uv_scale u, y = uv_scale v; the yarns hang below the mesh. Pattern
+// units per world unit, S = uv_scale / sqrt(|dP/du| |dP/dv|), are taken per
+// triangle (a warning names meshes whose |dP/du| and |dP/dv| differ by more
+// than 10%: stitches are stretched there).
+//
+// At a hit, resolve() fills knit::BaseHit (UV, the mesh's front-side frame,
+// S, curvature, the UV footprint of the ray differentials) and runs
+// KnitMaterial::shade with a per-sample footprint shift. A ray that meets
+// no yarn passes on straight (a pass-through event); in multi-scale mode it
+// also passes with probability p_delta. Otherwise the hit is shaded at the
+// base hit point with the yarn BSDF in the yarn's frame. Shadow rays are
+// attenuated by KnitMaterial::transmittance (near field 0 or 1, multi-scale
+// p_delta). docs/renderer.md#the-knit-model.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "knit/shading.h"
+#include "render/material_yarn.h"
+#include "render/mesh.h"
+#include "render/mesh_frame.h"
+#include "render/scene_desc.h"
+
+namespace knit::render {
+
+// Per-triangle pattern scale and curvature of a mesh under a knit material.
+struct KnitTriangle {
+  float pattern_per_world = 1;  // S = uv_scale / sqrt(|dP/du| |dP/dv|)
+  float kx = 0, ky = 0;         // normal curvature along +u and +v, 1 / world units
+};
+
+struct KnitMeshTables {
+  std::vector<KnitTriangle> triangles;
+  bool flat = true;           // every vertex normal (nearly) the same
+  size_t stretched = 0;       // triangles whose |dP/du| / |dP/dv| is off 1 by more than 10%
+  double stretched_area = 0;  // their share of the UV area
+  float worst_ratio = 1;      // the largest max(ratio, 1 / ratio)
+};
+
+// Computes the tables for `mesh` (world space, with UVs) at `uv_scale`.
+KnitMeshTables knit_mesh_tables(const TriangleMesh& mesh, float uv_scale);
+
+class KnitModelMaterial final : public YarnShadedMaterial {
+ public:
+  // `where` names the object in messages ("scene.json: objects[2]"). Throws
+  // SceneError for an unreadable baked-frame file.
+  KnitModelMaterial(const KnitDesc& desc, std::shared_ptr<const TriangleMesh> mesh, const std::string& scene_file,
+                    const std::string& material_path, const std::string& where, Warnings& warnings);
+  ~KnitModelMaterial() override;
+
+  const char* kind() const override { return "knit"; }
+  PassThrough resolve(SurfaceInteraction& si, const RayDifferential& ray, Sampler& sampler) const override;
+  Rgb transmittance(const SurfaceInteraction& si, Vec3 w, Sampler& sampler) const override;
+
+  const knit::KnitMaterial& model() const { return *model_; }
+  // The BaseHit resolve() passes to the model.
+  knit::BaseHit base_hit(const SurfaceInteraction& si) const;
+  const knit::FrameProvider* frame_provider() const { return frame_.get(); }
+  // Renderer-side tables for this mesh (per-triangle data, the MeshFrame).
+  size_t binding_bytes() const;
+
+ private:
+  std::shared_ptr<const knit::KnitMaterial> model_;
+  std::shared_ptr<const TriangleMesh> mesh_;
+  KnitMeshTables tables_;
+  std::unique_ptr<MeshFrame> frame_;  // null: flat mesh, or the curvature mode
+};
+
+}  // namespace knit::render
