@@ -47,6 +47,7 @@ Rgb PathIntegrator::shadow_transmittance(Vec3 origin, Vec3 dir, float tmax, Path
     if (si.light >= 0) return {};
     const Material& m = scene_.material(si.material);
     if (!m.can_pass_through()) return {};
+    if (m.resolves_hits()) ++stats.shadow_resolves;
     tr *= m.transmittance(si, dir, sampler);
     if (tr.is_black()) return {};
     r.o = offset_ray_origin(si.p, si.ng, dir);
@@ -101,6 +102,8 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
       // The knit model or a yarn tube: finds what lies below the hit and
       // sets the yarn shading frame, or lets the ray pass on straight.
       pt = m.resolve(si, ray, sampler);
+      ++stats.resolves;
+      if (pt.pass) ++stats.resolve_passes;
     } else {
       // Where the interpolated normal puts the viewer on the other side than
       // the geometry does (grazing views of smooth-shaded meshes), shade with

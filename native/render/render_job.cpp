@@ -83,6 +83,9 @@ RenderJobResult run_render_job(const RenderJob& job, const std::function<void(co
   rep.shadow_rays = r.stats.shadow_rays;
   rep.invalid_samples = r.stats.invalid_samples;
   rep.pass_limit = r.stats.pass_limit;
+  rep.resolves = r.stats.resolves;
+  rep.resolve_passes = r.stats.resolve_passes;
+  rep.shadow_resolves = r.stats.shadow_resolves;
   rep.triangles = scene.stats().triangles;
   rep.mesh_bytes = scene.stats().mesh_bytes;
   rep.embree_bytes = scene.accel().embree_bytes();

@@ -165,7 +165,7 @@ Scene::Scene(const SceneDesc& desc, const BuildOptions& options, Warnings& warni
     stats_.yarn_build_seconds = seconds_since(t_yarns);
     commit();
   }
-  stats_.triangles = accel_->num_primitives();
+  stats_.triangles = accel_->num_primitives() - stats_.yarn_segments;
 
   Vec3 lo, hi;
   accel_->bounds(lo, hi);
