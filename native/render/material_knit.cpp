@@ -62,6 +62,13 @@ KnitModelMaterial::KnitModelMaterial(const KnitDesc& desc, std::shared_ptr<const
     : model_(desc.model), mesh_(std::move(mesh)) {
   const float uv_scale = model_->params().uv_scale;
   tables_ = knit_mesh_tables(*mesh_, uv_scale);
+  if (model_->params().mode == knit::KnitMode::MultiScale) {
+    knit::KnitMaterialParams p = model_->params();
+    p.mode = knit::KnitMode::NearField;
+    point_model_ = std::make_shared<const knit::KnitMaterial>(model_->surface().pattern(), p);
+  }
+  min_footprint_ = 1e-4f * model_->surface().cell_width();
+  footprint_scale_ = desc.footprint_scale;
   if (tables_.stretched > 0) {
     char buf[160];
     std::snprintf(buf, sizeof buf,
@@ -88,7 +95,7 @@ size_t KnitModelMaterial::binding_bytes() const {
   return tables_.triangles.size() * sizeof(KnitTriangle) + (frame_ ? frame_->memory_bytes() : 0);
 }
 
-knit::BaseHit KnitModelMaterial::base_hit(const SurfaceInteraction& si) const {
+knit::BaseHit KnitModelMaterial::base_hit(const SurfaceInteraction& si, float diff_scale) const {
   knit::BaseHit h;
   h.u = si.uv.x;
   h.v = si.uv.y;
@@ -100,19 +107,29 @@ knit::BaseHit KnitModelMaterial::base_hit(const SurfaceInteraction& si) const {
   h.pattern_per_world = tri.pattern_per_world;
   h.kx = tri.kx;
   h.ky = tri.ky;
-  if (si.footprint.valid) {
-    h.dudx = si.footprint.dudx;
-    h.dvdx = si.footprint.dvdx;
-    h.dudy = si.footprint.dudy;
-    h.dvdy = si.footprint.dvdy;
+  if (si.footprint.valid && diff_scale > 0) {
+    const float k = footprint_scale_ / diff_scale;
+    h.dudx = si.footprint.dudx * k;
+    h.dvdx = si.footprint.dvdx * k;
+    h.dudy = si.footprint.dudy * k;
+    h.dvdy = si.footprint.dvdy * k;
   }
   return h;
+}
+
+const knit::KnitMaterial& KnitModelMaterial::model_for(const knit::BaseHit& h) const {
+  if (!point_model_) return *model_;
+  const float us = model_->params().uv_scale;
+  const float extent = us * (std::fabs(h.dudx) + std::fabs(h.dvdx) + std::fabs(h.dudy) + std::fabs(h.dvdy));
+  return extent > min_footprint_ ? *model_ : *point_model_;
 }
 
 PassThrough KnitModelMaterial::resolve(SurfaceInteraction& si, const RayDifferential& ray, Sampler& sampler) const {
   PassThrough pt;
   const Vec2 shift = sampler.get2d();
-  const knit::KnitShade sh = model_->shade(base_hit(si), to_kvec(ray.d), frame_.get(), {shift.x, shift.y});
+  const knit::BaseHit hit = base_hit(si, ray.diff_scale);
+  const knit::KnitMaterial& model = model_for(hit);
+  const knit::KnitShade sh = model.shade(hit, to_kvec(ray.d), frame_.get(), {shift.x, shift.y});
   if (sh.pass_through) {
     pt.pass = true;  // no yarn along this ray: it goes on straight
     return pt;
@@ -130,13 +147,14 @@ PassThrough KnitModelMaterial::resolve(SurfaceInteraction& si, const RayDifferen
   }
   si.shading = Frame::from_normal_tangent(n / ln, from_kvec(sh.st));
   si.yarn.active = true;
-  si.yarn.bsdf = model_->kernel_bsdf(sh);
+  si.yarn.bsdf = model.kernel_bsdf(sh);
   return pt;
 }
 
 Rgb KnitModelMaterial::transmittance(const SurfaceInteraction& si, Vec3 w, Sampler& sampler) const {
   const Vec2 shift = sampler.get2d();
-  return Rgb(model_->transmittance(base_hit(si), to_kvec(w), frame_.get(), {shift.x, shift.y}));
+  const knit::BaseHit hit = base_hit(si);
+  return Rgb(model_for(hit).transmittance(hit, to_kvec(w), frame_.get(), {shift.x, shift.y}));
 }
 
 }  // namespace knit::render

@@ -15,7 +15,10 @@
 // also passes with probability p_delta. Otherwise the hit is shaded at the
 // base hit point with the yarn BSDF in the yarn's frame. Shadow rays are
 // attenuated by KnitMaterial::transmittance (near field 0 or 1, multi-scale
-// p_delta). docs/renderer.md#the-knit-model.
+// p_delta). In multi-scale mode, hits without a ray footprint (shadow rays,
+// rays after a diffuse bounce) use the near-field model: the aggregate over
+// a point is that point's CAPM hit, so one march replaces N identical ones.
+// docs/renderer.md#the-knit-model.
 #pragma once
 
 #include <memory>
@@ -60,14 +63,25 @@ class KnitModelMaterial final : public YarnShadedMaterial {
   Rgb transmittance(const SurfaceInteraction& si, Vec3 w, Sampler& sampler) const override;
 
   const knit::KnitMaterial& model() const { return *model_; }
-  // The BaseHit resolve() passes to the model.
-  knit::BaseHit base_hit(const SurfaceInteraction& si) const;
+  // The BaseHit resolve() passes to the model; the UV footprint is scaled to
+  // `footprint_scale` pixels (KnitDesc) from the ray's differentials, which
+  // are `diff_scale` pixels apart.
+  knit::BaseHit base_hit(const SurfaceInteraction& si, float diff_scale = 1.0f) const;
   const knit::FrameProvider* frame_provider() const { return frame_.get(); }
   // Renderer-side tables for this mesh (per-triangle data, the MeshFrame).
   size_t binding_bytes() const;
 
  private:
+  // The model for hits without a footprint (shadow rays, rays after a
+  // diffuse bounce): in multi-scale mode a near-field twin of model_ (every
+  // footprint point would be the same CAPM ray: one march instead of N);
+  // otherwise model_ itself.
+  const knit::KnitMaterial& model_for(const knit::BaseHit& hit) const;
+  float min_footprint_ = 0;  // pattern units: smaller footprints count as none
+  float footprint_scale_ = 1;  // pixels
+
   std::shared_ptr<const knit::KnitMaterial> model_;
+  std::shared_ptr<const knit::KnitMaterial> point_model_;
   std::shared_ptr<const TriangleMesh> mesh_;
   KnitMeshTables tables_;
   std::unique_ptr<MeshFrame> frame_;  // null: flat mesh, or the curvature mode

@@ -103,6 +103,7 @@ struct KnitDesc {
   KnitFrames frames = KnitFrames::Exact;
   std::string frames_file;     // KnitFrames::Baked: the resolved frame image
   int explicit_samples = 32;   // explicit-yarn mode: polyline points per stitch
+  float footprint_scale = 1;   // multi-scale footprint, in pixels (whatever the spp)
 
   // The colour a diffuse preview uses: the first yarn colour.
   Rgb base_color() const;

@@ -387,29 +387,44 @@ TEST(SceneParse, Lights) {
 }
 
 // Errors found while building the scene (meshes, materials) also name the field.
-TEST(SceneBuild, KnitNeedsUvsAndTheExplicitPreviewFlag) {
+TEST(SceneBuild, KnitNeedsUvs) {
   const std::string dir = test::test_dir();
   test::write_file(dir, "no_uv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
   json j = base_scene();
   j["objects"][0]["material"] = "wool";
   const SceneDesc with_uv = parse_scene(with_mesh(j, test::mesh("quad.obj")), "scene.json", dir);
   Warnings w;
-  const std::string msg = scene_error_of([&] { Scene s(with_uv, BuildOptions{}, w); });
-  EXPECT_NE(msg.find("scene.json: materials.wool: rendering the knit material is not implemented yet"), std::string::npos)
-      << msg;
-  EXPECT_NE(msg.find("--knit-preview-diffuse"), std::string::npos);
+  EXPECT_NO_THROW(Scene(with_uv, BuildOptions{}, w));
   BuildOptions preview;
   preview.knit_preview_diffuse = true;
   EXPECT_NO_THROW(Scene(with_uv, preview, w));
+  BuildOptions tubes;
+  tubes.explicit_yarns = true;
+  EXPECT_NO_THROW(Scene(with_uv, tubes, w));
 
   const SceneDesc no_uv = parse_scene(with_mesh(j, "no_uv.obj"), "scene.json", dir);
-  const std::string msg2 = scene_error_of([&] { Scene s(no_uv, preview, w); });
-  EXPECT_NE(msg2.find("scene.json: objects[0].mesh: " + dir + "/no_uv.obj has no UV coordinates, which the knit material 'wool' needs"),
-            std::string::npos)
-      << msg2;
+  for (const BuildOptions& o : {BuildOptions{}, preview, tubes}) {
+    const std::string msg = scene_error_of([&] { Scene s(no_uv, o, w); });
+    EXPECT_NE(msg.find("scene.json: objects[0].mesh: " + dir + "/no_uv.obj has no UV coordinates, which the knit material 'wool' needs"),
+              std::string::npos)
+        << msg;
+  }
   // A diffuse material is fine without UVs.
   j["objects"][0]["material"] = "red";
-  EXPECT_NO_THROW(Scene(parse_scene(with_mesh(j, "no_uv.obj"), "scene.json", dir), preview, w));
+  EXPECT_NO_THROW(Scene(parse_scene(with_mesh(j, "no_uv.obj"), "scene.json", dir), BuildOptions{}, w));
+}
+
+TEST(SceneBuild, ExplicitYarnsThatWouldNotFitNameTheObject) {
+  json j = base_scene();
+  j["objects"][0]["material"] = "wool";
+  j["materials"]["wool"]["uv_scale"] = 1e5;  // 16000 x 22000 stitches on the unit quad
+  const SceneDesc d = parse(j);
+  Warnings w;
+  BuildOptions tubes;
+  tubes.explicit_yarns = true;
+  const std::string msg = scene_error_of([&] { Scene s(d, tubes, w); });
+  EXPECT_NE(msg.find("scene.json: objects[0]: explicit yarns of materials.wool:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("curve points"), std::string::npos) << msg;
 }
 
 TEST(SceneBuild, BadMeshesNameFileAndIndex) {
