@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Renders every example scene at its default settings with the CLI, prints
 # the wall time of each (the README table), and writes small PNGs for the
-# docs to docs/images/ (downscaled with oiiotool to at most 480 pixels wide).
+# docs to docs/images/ (downscaled with oiiotool to at most 400 pixels wide).
 #
 #   scripts/render_examples.sh BUILD_DIR [SCENE...]     (names without .json)
 set -euo pipefail
@@ -23,7 +23,7 @@ import json, sys
 r = json.load(open(sys.argv[1]))
 print(f"| {sys.argv[2]} | {r['width']}x{r['height']} | {r['spp']} | {r['seconds']['total']:.1f} s |")
 EOF
-  oiiotool "$out/$s.png" --resize "480x0" -o "docs/images/$s.png" 2>/dev/null ||
+  oiiotool "$out/$s.png" --resize "400x0" -o "docs/images/$s.png" 2>/dev/null ||
     oiiotool "$out/$s.png" -o "docs/images/$s.png"
 done
 rm -rf "$out"
