@@ -78,7 +78,11 @@ class Bench:
         return json.loads(r.stdout)
 
     def convergence(self, tag, scene, ladder, ref_spp, explicit=False):
-        """Render time and RMSE against the method's own reference along the ladder."""
+        """Render time and RMSE against the method's own reference along the ladder (cached by tag)."""
+        if not hasattr(self, "_conv"):
+            self._conv = {}
+        if tag in self._conv:
+            return self._conv[tag]
         ref, ref_rep = self.render(tag + "_ref", scene, ref_spp, seed=1000, explicit=explicit)
         points = []
         for spp in ladder:
@@ -91,8 +95,10 @@ class Bench:
         ref_noise = e1 / math.sqrt(ref_spp)
         for p in points:
             p["rmse_corrected"] = math.sqrt(max(p["rmse"] ** 2 - ref_noise ** 2, 1e-30))
-        return {"reference": ref, "reference_spp": ref_spp, "reference_seconds": ref_rep["seconds"]["render"],
-                "reference_noise": ref_noise, "points": points, "report": ref_rep}
+        self._conv[tag] = {"reference": ref, "reference_spp": ref_spp,
+                           "reference_seconds": ref_rep["seconds"]["render"], "reference_noise": ref_noise,
+                           "points": points, "report": ref_rep}
+        return self._conv[tag]
 
     @staticmethod
     def time_to_error(conv, target):
@@ -107,10 +113,11 @@ class Bench:
         p = pts[0] if target > pts[0]["rmse_corrected"] else pts[-1]
         return p["seconds"] * (p["rmse_corrected"] / target) ** 2
 
-    def equal_quality(self, name, scene_a, scene_b, label_a, label_b, ladder, ref_spp, explicit_b=False):
+    def equal_quality(self, name, scene_a, scene_b, label_a, label_b, ladder, ref_spp, explicit_b=False,
+                      tag_a=None, tag_b=None):
         print(f"equal quality: {name}", flush=True)
-        a = self.convergence(f"{name}_{label_a}", scene_a, ladder, ref_spp)
-        b = self.convergence(f"{name}_{label_b}", scene_b, ladder, ref_spp, explicit=explicit_b)
+        a = self.convergence(tag_a or f"{name}_{label_a}", scene_a, ladder, ref_spp)
+        b = self.convergence(tag_b or f"{name}_{label_b}", scene_b, ladder, ref_spp, explicit=explicit_b)
         # Target: the error method A reaches at the middle of the ladder, if B reaches it too.
         mid = a["points"][len(ladder) // 2]["rmse_corrected"]
         target = max(mid, b["points"][-1]["rmse_corrected"])
@@ -160,9 +167,9 @@ def main():
         sys.exit(2)
     quick = "--quick" in sys.argv
     b = Bench(sys.argv[1], sys.argv[2], quick)
-    size = 96 if quick else 160
+    size = 64 if quick else 128
     ladder = [1, 2, 4, 8, 16] if quick else [1, 2, 4, 8, 16, 32, 64]
-    ref_spp = 256 if quick else 2048
+    ref_spp = 128 if quick else 1024
 
     # 1. The half cylinder of Figure 7 (200 yarns), far view, front and back light.
     hc = sized(load("half_cylinder_front.json"), size, size)
@@ -180,11 +187,12 @@ def main():
     far = sized(load("swatch_far.json"), size, int(size * 0.75))
     near = json.loads(json.dumps(far))
     near["materials"]["wool"]["mode"] = "near_field"
-    b.results["far_view"] = b.equal_quality("far_view", far, near, "multi_scale", "near_field", ladder, ref_spp)
+    b.results["far_view"] = b.equal_quality("far_view", far, near, "multi_scale", "near_field", ladder, ref_spp,
+                                            tag_b="far_near_field")
     far4 = json.loads(json.dumps(far))
     far4["materials"]["wool"]["footprint_points"] = 4
     b.results["far_view_4_points"] = b.equal_quality("far_view4", far4, near, "multi_scale", "near_field", ladder,
-                                                     ref_spp)
+                                                     ref_spp, tag_b="far_near_field")
 
     # 4. Overhead of the knit material against diffuse, same mesh, lights and samples.
     b.results["overhead"] = {

@@ -45,6 +45,7 @@ KnitMeshTables knit_mesh_tables(const TriangleMesh& mesh, float uv_scale) {
   for (size_t i = 0; i < n; ++i)
     if (!ok[i]) t.triangles[i] = KnitTriangle{mean_s, 0, 0};
   if (total_area > 0) t.stretched_area /= total_area;
+  t.with_uv_area = s_count;
   t.flat = true;
   for (const Vec3& nv : mesh.normals)
     if (length(nv - mesh.normals[0]) > 1e-4f) {
@@ -58,10 +59,13 @@ KnitMeshTables knit_mesh_tables(const TriangleMesh& mesh, float uv_scale) {
 
 KnitModelMaterial::KnitModelMaterial(const KnitDesc& desc, std::shared_ptr<const TriangleMesh> mesh,
                                      const std::string& scene_file, const std::string& material_path,
-                                     const std::string& where, Warnings& warnings)
+                                     const std::string& object_path, const std::string& where, Warnings& warnings)
     : model_(desc.model), mesh_(std::move(mesh)) {
   const float uv_scale = model_->params().uv_scale;
   tables_ = knit_mesh_tables(*mesh_, uv_scale);
+  if (tables_.with_uv_area == 0)
+    throw SceneError(scene_file, object_path + ".mesh",
+                     mesh_->file + ": no triangle has a non-zero UV area, which the knit material needs");
   if (model_->params().mode == knit::KnitMode::MultiScale) {
     knit::KnitMaterialParams p = model_->params();
     p.mode = knit::KnitMode::NearField;

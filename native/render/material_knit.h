@@ -42,6 +42,7 @@ struct KnitTriangle {
 struct KnitMeshTables {
   std::vector<KnitTriangle> triangles;
   bool flat = true;           // every vertex normal (nearly) the same
+  size_t with_uv_area = 0;    // triangles with a usable UV map (the others get the mean scale)
   size_t stretched = 0;       // triangles whose |dP/du| / |dP/dv| is off 1 by more than 10%
   double stretched_area = 0;  // their share of the UV area
   float worst_ratio = 1;      // the largest max(ratio, 1 / ratio)
@@ -52,10 +53,12 @@ KnitMeshTables knit_mesh_tables(const TriangleMesh& mesh, float uv_scale);
 
 class KnitModelMaterial final : public YarnShadedMaterial {
  public:
-  // `where` names the object in messages ("scene.json: objects[2]"). Throws
-  // SceneError for an unreadable baked-frame file.
+  // `where` names the object in warnings ("scene.json: objects[2] (name)");
+  // errors name `object_path`. Throws SceneError for a mesh without any UV
+  // area or an unreadable baked-frame file.
   KnitModelMaterial(const KnitDesc& desc, std::shared_ptr<const TriangleMesh> mesh, const std::string& scene_file,
-                    const std::string& material_path, const std::string& where, Warnings& warnings);
+                    const std::string& material_path, const std::string& object_path, const std::string& where,
+                    Warnings& warnings);
   ~KnitModelMaterial() override;
 
   const char* kind() const override { return "knit"; }

@@ -82,7 +82,7 @@ Scene::Scene(const SceneDesc& desc, const BuildOptions& options, Warnings& warni
         continue;  // the base mesh is only the top of the yarn shell: the tubes replace it
       }
       const std::string where = desc.file + ": " + o.path + " (" + o.name + ")";
-      auto km = std::make_unique<KnitModelMaterial>(md.knit, mesh, desc.file, md.path, where, warnings);
+      auto km = std::make_unique<KnitModelMaterial>(md.knit, mesh, desc.file, md.path, o.path, where, warnings);
       stats_.knit_binding_bytes += km->binding_bytes();
       materials_.push_back(std::move(km));
       has_pass_through_ = true;
@@ -147,7 +147,8 @@ Scene::Scene(const SceneDesc& desc, const BuildOptions& options, Warnings& warni
         tubes = std::make_shared<const YarnTubes>(
             build_yarn_tubes(*job.mesh, *job.material->knit.model, job.material->knit.explicit_samples));
       } catch (const std::exception& e) {
-        throw SceneError(desc.file, job.object->path, std::string("explicit yarns of ") + job.material->path + ": " + e.what());
+        throw SceneError(desc.file, job.object->path + ".mesh",
+                         std::string("explicit yarns of ") + job.material->path + ": " + e.what());
       }
       if (tubes->segments.empty()) {
         warnings.add(desc.file + ": " + job.object->path + ": no explicit yarn of " + job.material->path +

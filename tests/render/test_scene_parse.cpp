@@ -409,6 +409,14 @@ TEST(SceneBuild, KnitNeedsUvs) {
               std::string::npos)
         << msg;
   }
+  // UVs without area (every vertex at the same UV) are an error too, for the model and the tubes.
+  test::write_file(dir, "flat_uv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.5 0.5\nf 1/1 2/1 3/1\n");
+  const SceneDesc flat_uv = parse_scene(with_mesh(j, "flat_uv.obj"), "scene.json", dir);
+  for (const BuildOptions& o : {BuildOptions{}, tubes}) {
+    const std::string msg = scene_error_of([&] { Scene s(flat_uv, o, w); });
+    EXPECT_NE(msg.find("scene.json: objects[0].mesh:"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("no triangle has a non-zero UV area"), std::string::npos) << msg;
+  }
   // A diffuse material is fine without UVs.
   j["objects"][0]["material"] = "red";
   EXPECT_NO_THROW(Scene(parse_scene(with_mesh(j, "no_uv.obj"), "scene.json", dir), BuildOptions{}, w));
@@ -423,7 +431,7 @@ TEST(SceneBuild, ExplicitYarnsThatWouldNotFitNameTheObject) {
   BuildOptions tubes;
   tubes.explicit_yarns = true;
   const std::string msg = scene_error_of([&] { Scene s(d, tubes, w); });
-  EXPECT_NE(msg.find("scene.json: objects[0]: explicit yarns of materials.wool:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("scene.json: objects[0].mesh: explicit yarns of materials.wool:"), std::string::npos) << msg;
   EXPECT_NE(msg.find("curve points"), std::string::npos) << msg;
 }
 
