@@ -7,6 +7,7 @@
 #include <string>
 
 #include "knit/yarns.h"
+#include "render/errors.h"
 #include "render/material_knit.h"
 #include "render/uv_grid.h"
 
@@ -32,7 +33,7 @@ YarnTubes build_yarn_tubes(const TriangleMesh& mesh, const knit::KnitMaterial& m
   const double rows = double(pattern.rows()) * double(tiles_v);
   const double points = rows * (double(pattern.cols()) * double(tiles_u) * samples_per_stitch + 1);
   if (points > double(max_points) || tiles_u > 4096 || tiles_v > 4096)
-    throw std::runtime_error(mesh.file + ": the explicit yarns would need " + std::to_string(points) +
+    throw std::runtime_error(mesh.file + ": the explicit yarns would need " + fmt_num(points) +
                              " curve points (" + std::to_string(tiles_u) + " x " + std::to_string(tiles_v) +
                              " pattern repeats), more than the limit of " + std::to_string(max_points) +
                              "; lower uv_scale or explicit_samples");
