@@ -1,7 +1,11 @@
 // Renderer throughput: camera samples per second on the demo scene at low
-// resolution, and raw closest-hit rays per second on its geometry.
+// resolution, raw closest-hit rays per second on its geometry, and the cost
+// of one camera hit on knit fabric with the model and as explicit yarns.
 //   ./bench/bench_render [--benchmark_filter=...]
 #include <benchmark/benchmark.h>
+
+#include <map>
+#include <memory>
 
 #include "render/renderer.h"
 #include "render/rng.h"
@@ -56,6 +60,81 @@ void BM_ClosestHit(benchmark::State& state) {
   state.counters["rays/s"] = benchmark::Counter(static_cast<double>(n), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_ClosestHit);
+
+// The knit model's cost per camera hit: Accel::intersect + Material::resolve
+// (KnitMaterial::shade) on the base mesh, against intersecting the explicit
+// yarn tubes of the same scene. Arg 0: half cylinder far view (curved, exact
+// frames), 1: the same with frames "curvature", 2: flat swatch close-up,
+// 3: flat swatch far view (multi-scale).
+struct KnitCase {
+  std::unique_ptr<Scene> model, tubes;
+  std::vector<RayDifferential> rays;  // camera rays that hit the fabric
+};
+
+const KnitCase& knit_case(int which) {
+  static std::map<int, KnitCase> cache;
+  auto it = cache.find(which);
+  if (it != cache.end()) return it->second;
+  const char* files[] = {"half_cylinder_front.json", "half_cylinder_front.json", "swatch_closeup.json",
+                         "swatch_far.json"};
+  SceneDesc d = load_scene_file(std::string(KNIT_SOURCE_DIR) + "/examples/scenes/" + files[which]);
+  d.film.width = d.film.height = 128;
+  if (which == 1)
+    for (MaterialDesc& m : d.materials)
+      if (m.type == MaterialType::Knit) m.knit.frames = KnitFrames::Curvature;
+  KnitCase& c = cache[which];
+  static Warnings warnings;
+  c.model = std::make_unique<Scene>(d, BuildOptions{}, warnings);
+  BuildOptions tubes;
+  tubes.explicit_yarns = true;
+  c.tubes = std::make_unique<Scene>(d, tubes, warnings);
+  Pcg32 rng(7, 9);
+  while (c.rays.size() < 4096) {
+    const RayDifferential ray = c.model->camera().generate(rng.next_float() * 128, rng.next_float() * 128, 1.0f);
+    SurfaceInteraction si;
+    if (c.model->accel().intersect(ray, si) && si.material >= 0 && c.model->material(si.material).resolves_hits())
+      c.rays.push_back(ray);
+  }
+  return c;
+}
+
+void BM_KnitModelHit(benchmark::State& state) {
+  const KnitCase& c = knit_case(static_cast<int>(state.range(0)));
+  size_t i = 0;
+  uint64_t passed = 0, n = 0;
+  for (auto _ : state) {
+    const RayDifferential& ray = c.rays[i++ % c.rays.size()];
+    SurfaceInteraction si;
+    c.model->accel().intersect(ray, si);
+    Sampler sampler(1, i, 0);
+    const PassThrough pt = c.model->material(si.material).resolve(si, ray, sampler);
+    passed += pt.pass;
+    ++n;
+    benchmark::DoNotOptimize(si.yarn.bsdf);
+  }
+  state.counters["hits/s"] = benchmark::Counter(static_cast<double>(n), benchmark::Counter::kIsRate);
+  state.counters["passed%"] = 100.0 * static_cast<double>(passed) / static_cast<double>(n);
+}
+BENCHMARK(BM_KnitModelHit)->DenseRange(0, 3)->Unit(benchmark::kMicrosecond);
+
+void BM_KnitExplicitHit(benchmark::State& state) {
+  const KnitCase& c = knit_case(static_cast<int>(state.range(0)));
+  size_t i = 0;
+  uint64_t n = 0;
+  for (auto _ : state) {
+    const RayDifferential& ray = c.rays[i++ % c.rays.size()];
+    SurfaceInteraction si;
+    const bool hit = c.tubes->accel().intersect(ray, si);
+    if (hit && si.material >= 0) {
+      Sampler sampler(1, i, 0);
+      c.tubes->material(si.material).resolve(si, ray, sampler);
+    }
+    ++n;
+    benchmark::DoNotOptimize(si.yarn.bsdf);
+  }
+  state.counters["hits/s"] = benchmark::Counter(static_cast<double>(n), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_KnitExplicitHit)->DenseRange(0, 3)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

@@ -119,20 +119,39 @@ def sphere(radius=1.0, n_lon=64, n_lat=32):
 
 def cushion(sx=0.9, sz=0.9, h=0.22, n=40):
     """A pillow: two puffed square panels, y = +-h sqrt((1 - x^4)(1 - z^4)), sewn
-    together at their edges and resting on y = 0. UVs are planar per panel in
-    scene units (top panel u in [0, 2 sx], bottom panel beside it)."""
-    def g(s, t):
-        x, z = 2 * s - 1, 2 * t - 1
+    together at their edges and resting on y = 0. UVs in scene units per panel
+    (top panel first, the bottom one beside it): u is the arc length along the
+    panel's x lines measured from its centre line, v the arc length along its
+    z lines, so stitches keep their size over the puffed surface (the panel is
+    not developable, so it is not exactly isometric: the knit material warns
+    where |dP/du| and |dP/dv| differ by more than 10%)."""
+    def g(x, z):
         return math.sqrt(max(0.0, (1 - x ** 4) * (1 - z ** 4)))
 
-    def top(s, t):
-        return ((2 * s - 1) * sx, h + h * g(s, t), (1 - 2 * t) * sz), (2 * sx * s, 2 * sz * t)
+    def arc(f, a, b, steps=400):
+        """Arc length of the curve (t, f(t)) for t from a to b (signed)."""
+        total, prev = 0.0, f(a)
+        for k in range(1, steps + 1):
+            t0, t1 = a + (b - a) * (k - 1) / steps, a + (b - a) * k / steps
+            y = f(t1)
+            total += math.hypot(t1 - t0, y - prev)
+            prev = y
+        return total if b >= a else -total
 
-    def bottom(s, t):
-        return ((2 * s - 1) * sx, h - h * g(s, t), (2 * t - 1) * sz), (2 * sx * (1 + s) + 0.1, 2 * sz * t)
+    def panel(sign, u_offset):
+        """sign +1: the top panel (z from +sz to -sz as t grows, facing up);
+        -1: the bottom one (z from -sz to +sz, facing down)."""
+        def fn(s, t):
+            x = (2 * s - 1) * sx
+            z = sign * (1 - 2 * t) * sz
+            y = h + sign * h * g(x / sx, z / sz)
+            u = arc(lambda xx: h * g(xx / sx, z / sz), 0.0, x)
+            v = sign * -arc(lambda zz: h * g(x / sx, zz / sz), 0.0, z)
+            return (x, y, z), (u + u_offset, v + 1.3 * sz)
+        return fn
 
-    v1, t1, n1, f1 = surface(top, n, n)
-    v2, t2, n2, f2 = surface(bottom, n, n)
+    v1, t1, n1, f1 = surface(panel(+1, 1.3 * sx), n, n)
+    v2, t2, n2, f2 = surface(panel(-1, 4.0 * sx), n, n)
     off = len(v1)
     return v1 + v2, t1 + t2, n1 + n2, f1 + [(a + off, b + off, c + off) for a, b, c in f2]
 
@@ -156,6 +175,97 @@ def scarf(width=0.25, length=2.0, nw=8, nl=160):
     return surface(fn, nw, nl, flip=True)  # front (outside of the drape) faces +y at the top
 
 
+def tablecloth(top_x=1.2, top_z=0.8, height=0.75, radius=0.02, drop=0.35, width=0.9, n_top=24, n_bend=8,
+               n_drop=12, n_w=12):
+    """A cloth lying across a table top (top_x wide along x, at y = height) and
+    hanging over its two x edges: flat on the top, bent around the edge with
+    radius `radius`, then straight down by `drop`. It is a developable
+    surface and its UVs are the flat cloth's own coordinates in scene units
+    (u along x over the top and down the sides, v across, 0..width), so the
+    UV map is isometric: no stretched stitches. Slightly wider than the
+    table (top_z), so its side edges hang free."""
+    half = top_x / 2
+    bend = math.pi * radius / 2
+    length = top_x + 2 * (bend + drop)
+
+    def centre(a):
+        """Point of the cloth's centre line at arc length a (0 at the -x end)."""
+        c = a - length / 2  # signed arc from the middle of the top
+        sign = 1 if c >= 0 else -1
+        c = abs(c)
+        if c <= half:
+            return sign * c, height
+        if c <= half + bend:
+            ang = (c - half) / radius
+            return sign * (half + radius * math.sin(ang)), height - radius * (1 - math.cos(ang))
+        return sign * (half + radius), height - radius - (c - half - bend)
+
+    # Parameter breakpoints so the flat, bent and hanging parts each get rows.
+    def arc(s):
+        segs = [(drop, n_drop), (bend, n_bend), (top_x, n_top), (bend, n_bend), (drop, n_drop)]
+        total = sum(n for _, n in segs)
+        k = s * total
+        a = 0.0
+        for seg_len, n in segs:
+            if k <= n:
+                return a + seg_len * k / n
+            a += seg_len
+            k -= n
+        return length
+
+    def fn(s, t):
+        a = arc(s)
+        x, y = centre(a)
+        z = (0.5 - t) * width
+        return (x, y, z), (a, t * width)
+    nu = 2 * (n_drop + n_bend) + n_top
+    return surface(fn, nu, n_w)  # the outside of the cloth faces up / outwards
+
+
+def box(lo, hi):
+    """An axis-aligned box (outward faces), flat-shaded, UVs per face in [0, 1]."""
+    verts, uvs, normals, faces = [], [], [], []
+    x0, y0, z0 = lo
+    x1, y1, z1 = hi
+    quads = [
+        ((x0, y0, z1), (x1, y0, z1), (x1, y1, z1), (x0, y1, z1), (0, 0, 1)),
+        ((x1, y0, z0), (x0, y0, z0), (x0, y1, z0), (x1, y1, z0), (0, 0, -1)),
+        ((x1, y0, z1), (x1, y0, z0), (x1, y1, z0), (x1, y1, z1), (1, 0, 0)),
+        ((x0, y0, z0), (x0, y0, z1), (x0, y1, z1), (x0, y1, z0), (-1, 0, 0)),
+        ((x0, y1, z1), (x1, y1, z1), (x1, y1, z0), (x0, y1, z0), (0, 1, 0)),
+        ((x0, y0, z0), (x1, y0, z0), (x1, y0, z1), (x0, y0, z1), (0, -1, 0)),
+    ]
+    for a, b, c, d, n in quads:
+        k = len(verts)
+        verts += [a, b, c, d]
+        uvs += [(0, 0), (1, 0), (1, 1), (0, 1)]
+        normals += [n] * 4
+        faces += [(k, k + 1, k + 2), (k, k + 2, k + 3)]
+    return verts, uvs, normals, faces
+
+
+def merge(*meshes):
+    verts, uvs, normals, faces = [], [], [], []
+    for v, t, n, f in meshes:
+        off = len(verts)
+        verts += v
+        uvs += t
+        normals += n
+        faces += [(a + off, b + off, c + off) for a, b, c in f]
+    return verts, uvs, normals, faces
+
+
+def table(top_x=1.2, top_z=0.8, height=0.75, thick=0.04, leg=0.05):
+    """A table: a top slab just under y = height and four legs."""
+    hx, hz = top_x / 2, top_z / 2
+    parts = [box((-hx, height - thick, -hz), (hx, height - 0.002, hz))]
+    for sx in (-1, 1):
+        for sz in (-1, 1):
+            cx, cz = sx * (hx - 0.08), sz * (hz - 0.08)
+            parts.append(box((cx - leg / 2, 0.0, cz - leg / 2), (cx + leg / 2, height - thick, cz + leg / 2)))
+    return merge(*parts)
+
+
 def main():
     out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "examples", "scenes", "meshes")
     os.makedirs(out, exist_ok=True)
@@ -166,6 +276,8 @@ def main():
         "sphere": sphere(),
         "cushion": cushion(),
         "scarf": scarf(),
+        "tablecloth": tablecloth(),
+        "table": table(),
     }
     for name, (v, t, n, f) in meshes.items():
         path = os.path.join(out, name + ".obj")

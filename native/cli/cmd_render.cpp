@@ -29,8 +29,10 @@ const char* kUsage =
     "  --report FILE.json       write the render report as JSON\n"
     "  --display NAME           OpenColorIO display for PNG output\n"
     "  --view NAME              OpenColorIO view, or DISPLAY/VIEW\n"
-    "  --knit-preview-diffuse   render knit materials as diffuse surfaces of their base\n"
-    "                           colour (the knit appearance model is not implemented yet)\n";
+    "  --explicit-yarns         render knit materials as explicit yarn tubes (the ground\n"
+    "                           truth) instead of with the knit model\n"
+    "  --knit-preview-diffuse   debug: render knit materials as diffuse surfaces of their\n"
+    "                           first yarn colour\n";
 
 int run(const std::vector<std::string>& args) {
   using namespace knit::render;
@@ -57,6 +59,8 @@ int run(const std::vector<std::string>& args) {
       job.display.display = option_value(args, i);
     } else if (a == "--view") {
       job.display.view = option_value(args, i);
+    } else if (a == "--explicit-yarns") {
+      job.explicit_yarns = true;
     } else if (a == "--knit-preview-diffuse") {
       job.knit_preview_diffuse = true;
     } else if (!a.empty() && a[0] == '-') {

@@ -24,6 +24,7 @@ RayDifferential PinholeCamera::generate(float raster_x, float raster_y, float di
   r.o = pos_;
   r.d = direction(raster_x, raster_y);
   r.has_differentials = true;
+  r.diff_scale = diff_scale;
   r.rx_o = pos_;
   r.ry_o = pos_;
   r.rx_d = r.d + (direction(raster_x + 1.0f, raster_y) - r.d) * diff_scale;

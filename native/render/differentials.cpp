@@ -6,6 +6,7 @@ namespace knit::render {
 
 void differentials_pass_through(const RayDifferential& in, const SurfaceInteraction& si, RayDifferential& out) {
   out.has_differentials = in.has_differentials && si.footprint.valid;
+  out.diff_scale = in.diff_scale;
   if (!out.has_differentials) return;
   out.rx_o = si.p + si.footprint.dpdx;
   out.ry_o = si.p + si.footprint.dpdy;
@@ -21,6 +22,7 @@ void differentials_pass_through(const RayDifferential& in, const SurfaceInteract
 void differentials_specular(const RayDifferential& in, const SurfaceInteraction& si, const BsdfSample& bs,
                             RayDifferential& out) {
   out.has_differentials = in.has_differentials && si.footprint.valid;
+  out.diff_scale = in.diff_scale;
   if (!out.has_differentials) return;
   const Footprint& f = si.footprint;
   const Vec3 wo = -in.d;

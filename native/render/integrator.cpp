@@ -23,7 +23,8 @@ struct PathState {
 };
 }  // namespace
 
-Rgb PathIntegrator::shadow_transmittance(Vec3 origin, Vec3 dir, float tmax, PathStats& stats) const {
+Rgb PathIntegrator::shadow_transmittance(Vec3 origin, Vec3 dir, float tmax, PathStats& stats,
+                                         Sampler& sampler) const {
   if (!scene_.has_pass_through()) {
     ++stats.shadow_rays;
     Ray r;
@@ -46,7 +47,8 @@ Rgb PathIntegrator::shadow_transmittance(Vec3 origin, Vec3 dir, float tmax, Path
     if (si.light >= 0) return {};
     const Material& m = scene_.material(si.material);
     if (!m.can_pass_through()) return {};
-    tr *= m.transmittance(si, si.shading.to_local(dir));
+    if (m.resolves_hits()) ++stats.shadow_resolves;
+    tr *= m.transmittance(si, dir, sampler);
     if (tr.is_black()) return {};
     r.o = offset_ray_origin(si.p, si.ng, dir);
     if (finite) {
@@ -94,33 +96,40 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
     }
 
     const Material& m = scene_.material(si.material);
-    // Where the interpolated normal puts the viewer on the other side than
-    // the geometry does (grazing views of smooth-shaded meshes), shade with
-    // the geometric normal: otherwise every sampled direction would be on
-    // the wrong side of the surface and the path would be lost.
-    if (dot(wo, si.shading.n) * dot(wo, si.ng) <= 0) {
-      const float sign = dot(si.shading.b, cross(si.shading.n, si.shading.t)) < 0 ? -1.0f : 1.0f;
-      si.shading = Frame::from_normal_tangent(si.ng, si.shading.t);
-      si.shading.b = si.shading.b * sign;
+    const bool resolves = m.resolves_hits();
+    PassThrough pt;
+    if (resolves) {
+      // The knit model or a yarn tube: finds what lies below the hit and
+      // sets the yarn shading frame, or lets the ray pass on straight.
+      pt = m.resolve(si, ray, sampler);
+      ++stats.resolves;
+      if (pt.pass) ++stats.resolve_passes;
+    } else {
+      // Where the interpolated normal puts the viewer on the other side than
+      // the geometry does (grazing views of smooth-shaded meshes), shade with
+      // the geometric normal: otherwise every sampled direction would be on
+      // the wrong side of the surface and the path would be lost.
+      if (dot(wo, si.shading.n) * dot(wo, si.ng) <= 0) {
+        const float sign = dot(si.shading.b, cross(si.shading.n, si.shading.t)) < 0 ? -1.0f : 1.0f;
+        si.shading = Frame::from_normal_tangent(si.ng, si.shading.t);
+        si.shading.b = si.shading.b * sign;
+      }
+      if (m.can_pass_through()) pt = m.pass_through(si, si.shading.to_local(wo), sampler.get1d());
     }
     const Vec3 wo_l = si.shading.to_local(wo);
-
-    if (m.can_pass_through()) {
-      const PassThrough pt = m.pass_through(si, wo_l, sampler.get1d());
-      beta *= pt.weight;
-      if (pt.pass) {
-        if (++passes > kMaxPassThrough) {
-          ++stats.pass_limit;
-          break;
-        }
-        RayDifferential next;
-        next.o = offset_ray_origin(si.p, si.ng, ray.d);
-        next.d = ray.d;
-        differentials_pass_through(ray, si, next);
-        ray = next;
-        ++stats.bounce_rays;
-        continue;  // not a bounce
+    beta *= pt.weight;
+    if (pt.pass) {
+      if (++passes > kMaxPassThrough) {
+        ++stats.pass_limit;
+        break;
       }
+      RayDifferential next;
+      next.o = offset_ray_origin(si.p, si.ng, ray.d);
+      next.d = ray.d;
+      differentials_pass_through(ray, si, next);
+      ray = next;
+      ++stats.bounce_rays;
+      continue;  // not a bounce
     }
     if (depth >= settings_.max_depth) break;
 
@@ -136,7 +145,7 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
         const Rgb f = m.eval(si, wo_l, wi_l);
         const bool geo_reflect = dot(ls.wi, si.ng) * dot(wo, si.ng) > 0;
         const bool sh_reflect = wi_l.z * wo_l.z > 0;
-        if (!f.is_black() && geo_reflect == sh_reflect) {
+        if (!f.is_black() && (resolves || geo_reflect == sh_reflect)) {
           const Vec3 origin = offset_ray_origin(si.p, si.ng, ls.wi);
           Vec3 dir = ls.wi;
           float tmax = kInf;
@@ -147,7 +156,7 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
             tmax = dist * (1.0f - 1e-4f) - 1e-5f * (1.0f + max_abs_component(ls.p));
           }
           if (tmax > 0) {
-            const Rgb tr = shadow_transmittance(origin, dir, tmax, stats);
+            const Rgb tr = shadow_transmittance(origin, dir, tmax, stats, sampler);
             if (!tr.is_black()) {
               float w = 1.0f;
               if (!ls.delta && strategy == Strategy::Mis)
@@ -167,7 +176,7 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
     const Vec3 wi = si.shading.to_world(bs.wi);
     const bool geo_reflect = dot(wi, si.ng) * dot(wo, si.ng) > 0;
     const bool lobe_reflect = (bs.flags & kReflection) != 0;
-    if (geo_reflect != lobe_reflect) break;  // shading normal and geometry disagree: absorbed
+    if (!resolves && geo_reflect != lobe_reflect) break;  // shading normal and geometry disagree: absorbed
     beta *= bs.weight;
     state.specular = bs.is_delta();
     state.bsdf_pdf = bs.pdf;

@@ -19,6 +19,9 @@ struct PathStats {
   uint64_t shadow_rays = 0;     // NEE visibility rays (each surface crossing counts one)
   uint64_t invalid_samples = 0; // NaN, Inf or negative radiance; dropped and reported
   uint64_t pass_limit = 0;      // paths stopped by the pass-through safety limit
+  uint64_t resolves = 0;        // hits resolved by a material (knit model: shade(); explicit yarns)
+  uint64_t resolve_passes = 0;  // ... of which passed straight on
+  uint64_t shadow_resolves = 0; // shadow-ray crossings of such materials (knit model: transmittance())
 
   void add(const PathStats& o) {
     camera_rays += o.camera_rays;
@@ -26,6 +29,9 @@ struct PathStats {
     shadow_rays += o.shadow_rays;
     invalid_samples += o.invalid_samples;
     pass_limit += o.pass_limit;
+    resolves += o.resolves;
+    resolve_passes += o.resolve_passes;
+    shadow_resolves += o.shadow_resolves;
   }
   uint64_t total_rays() const { return camera_rays + bounce_rays + shadow_rays; }
 };
@@ -45,7 +51,8 @@ class PathIntegrator {
   // Transmittance from `origin` along unit `dir` up to `tmax` (inf for
   // infinite lights): 0 when blocked, the product of pass-through
   // transmittances otherwise.
-  Rgb shadow_transmittance(Vec3 origin, Vec3 dir, float tmax, PathStats& stats) const;
+  // Stochastic transmittances (the knit model) draw from `sampler`.
+  Rgb shadow_transmittance(Vec3 origin, Vec3 dir, float tmax, PathStats& stats, Sampler& sampler) const;
 
  private:
   const Scene& scene_;

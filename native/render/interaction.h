@@ -1,9 +1,22 @@
 // What the integrator and the materials know about a ray-surface hit.
 #pragma once
 
+#include "knit/kernel.h"
 #include "render/vec.h"
 
 namespace knit::render {
+
+// Yarn shading at a hit (the knit model's base hits and explicit yarn
+// tubes): filled by the shape (curve data) and by Material::resolve (the
+// kernel BSDF), read by the yarn materials' eval/pdf/sample.
+struct YarnShading {
+  bool active = false;      // bsdf is set: the hit is shaded with the yarn BSDF
+  knit::k::KYarnBsdf bsdf{};
+  // Explicit yarn tubes (CurveShape): colour index, arc length along the yarn
+  // (pattern units) and azimuth around it (radians) at the hit.
+  int color = 0;
+  float arc = 0, phi = 0;
+};
 
 // Screen-space footprint of a hit (ray differentials, Igehy 1999): how the
 // hit point, the UVs and the shading normal change from one pixel to the
@@ -26,6 +39,7 @@ struct SurfaceInteraction {
   unsigned geom_id = 0, prim_id = 0;
   int material = -1;  // index into the scene's materials, -1 for lights
   int light = -1;     // index into the scene's lights when the surface emits
+  YarnShading yarn;
 };
 
 }  // namespace knit::render

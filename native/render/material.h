@@ -12,11 +12,22 @@
 // weight (e.g. 1 / (1 - P)) multiplies the path throughput before shading.
 // Shadow rays crossing the surface are attenuated by transmittance(w), which
 // must equal the expected pass-through weight so NEE and BSDF paths agree.
+//
+// Hit resolution (the knit model and explicit yarns, resolves_hits() true):
+// resolve() runs once at every hit of a path, first. It finds what the ray
+// really meets below the hit (CAPM through the yarn shell; the inside of a
+// yarn tube) and either passes the ray on straight (a pass-through event, as
+// above) or sets the shading frame and si.yarn for eval/pdf/sample. The
+// integrator then neither swaps in the geometric normal nor rejects
+// directions on the "wrong" side of the geometric normal: the yarn BSDF's
+// reflection and transmission are about the yarn, not the base surface.
 #pragma once
 
 #include <cstdint>
 
 #include "render/interaction.h"
+#include "render/ray.h"
+#include "render/rng.h"
 #include "render/vec.h"
 
 namespace knit::render {
@@ -50,8 +61,12 @@ class Material {
 
   // Stochastic pass-through decision with the uniform number u.
   virtual PassThrough pass_through(const SurfaceInteraction&, Vec3 /*wo*/, float /*u*/) const { return {}; }
-  // Straight-through transmittance for a shadow ray crossing along w.
-  virtual Rgb transmittance(const SurfaceInteraction&, Vec3 /*w*/) const { return {}; }
+  // Straight-through transmittance for a shadow ray crossing along the world
+  // direction w (stochastic materials draw from `sampler`).
+  virtual Rgb transmittance(const SurfaceInteraction&, Vec3 /*w*/, Sampler& /*sampler*/) const { return {}; }
+  // Hit resolution (see above).
+  virtual bool resolves_hits() const { return false; }
+  virtual PassThrough resolve(SurfaceInteraction&, const RayDifferential&, Sampler&) const { return {}; }
   // True when pass_through() or transmittance() can be non-zero.
   virtual bool can_pass_through() const { return false; }
   // False when every lobe is delta: next-event estimation is skipped.

@@ -47,7 +47,7 @@ class ThinMaterial final : public Material {
   explicit ThinMaterial(const ThinDesc& d);
   const char* kind() const override { return "thin"; }
   PassThrough pass_through(const SurfaceInteraction&, Vec3 wo, float u) const override;
-  Rgb transmittance(const SurfaceInteraction&, Vec3) const override { return transmittance_; }
+  Rgb transmittance(const SurfaceInteraction&, Vec3, Sampler&) const override { return transmittance_; }
   bool can_pass_through() const override { return pass_prob_ > 0; }
   bool has_smooth_lobes() const override { return true; }
   Rgb eval(const SurfaceInteraction& si, Vec3 wo, Vec3 wi) const override { return diffuse_.eval(si, wo, wi); }

@@ -2,6 +2,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -38,6 +39,25 @@ Frame interpolate_frame(const TriangleMesh& m, size_t tri, float b1, float b2) {
   return f;
 }
 
+bool uv_derivatives(const TriangleMesh& m, size_t tri, UvDerivatives& d) {
+  if (!m.has_uvs()) return false;
+  const uint32_t i0 = m.indices[3 * tri], i1 = m.indices[3 * tri + 1], i2 = m.indices[3 * tri + 2];
+  const Vec2 t0 = m.uvs[i0], t1 = m.uvs[i1], t2 = m.uvs[i2];
+  const double du1 = double(t1.x) - t0.x, dv1 = double(t1.y) - t0.y;
+  const double du2 = double(t2.x) - t0.x, dv2 = double(t2.y) - t0.y;
+  const double det = du1 * dv2 - du2 * dv1;
+  const Vec3 e1 = m.positions[i1] - m.positions[i0], e2 = m.positions[i2] - m.positions[i0];
+  const double scale = std::max(length2(e1), length2(e2));
+  if (!(std::fabs(det) > 1e-12) || !(scale > 0)) return false;
+  const float a = float(dv2 / det), b = float(-dv1 / det), c = float(-du2 / det), e = float(du1 / det);
+  d.dpdu = e1 * a + e2 * b;
+  d.dpdv = e1 * c + e2 * e;
+  const Vec3 n1 = m.normals[i1] - m.normals[i0], n2 = m.normals[i2] - m.normals[i0];
+  d.dndu = n1 * a + n2 * b;
+  d.dndv = n1 * c + n2 * e;
+  return is_finite(d.dpdu) && is_finite(d.dpdv) && length2(d.dpdu) > 0 && length2(d.dpdv) > 0;
+}
+
 MeshFrame::MeshFrame(std::shared_ptr<const TriangleMesh> mesh, float uv_scale)
     : mesh_(std::move(mesh)), uv_scale_(uv_scale) {
   if (!(uv_scale > 0) || !std::isfinite(uv_scale))
@@ -46,6 +66,32 @@ MeshFrame::MeshFrame(std::shared_ptr<const TriangleMesh> mesh, float uv_scale)
   grid_ = std::make_unique<UvTriangleGrid>(*mesh_);
   if (grid_->num_triangles() == 0)
     throw std::invalid_argument(mesh_->file + ": no triangle has a non-zero UV area");
+  curvature_.resize(mesh_->num_triangles());
+  for (size_t i = 0; i < curvature_.size(); ++i) {
+    UvDerivatives d;
+    if (!uv_derivatives(*mesh_, i, d)) continue;
+    // Per pattern unit: a pattern unit along x is |dP/du| / uv_scale world units.
+    curvature_[i] = {d.curvature_u() * length(d.dpdu) / uv_scale_, d.curvature_v() * length(d.dpdv) / uv_scale_};
+    if (!std::isfinite(curvature_[i].x) || !std::isfinite(curvature_[i].y)) curvature_[i] = {0, 0};
+  }
+}
+
+size_t MeshFrame::memory_bytes() const {
+  size_t b = curvature_.size() * sizeof(Vec2);
+  if (grid_) b += grid_->memory_bytes();
+  if (baked_) b += baked_->data.size() * sizeof(float);
+  return b;
+}
+
+knit::Vec3 MeshFrame::curvature(float x, float y) const {
+  if (!mesh_) return knit::k::kv3(0, 0, 0);
+  const Vec2 uv{x / uv_scale_, y / uv_scale_};
+  float b1 = 0, b2 = 0;
+  int64_t tri = grid_->locate(uv, b1, b2);
+  if (tri < 0) tri = grid_->nearest(uv, b1, b2);
+  if (tri < 0) return knit::k::kv3(0, 0, 0);
+  const Vec2 k = curvature_[static_cast<size_t>(tri)];
+  return knit::k::kv3(k.x, k.y, 0);
 }
 
 MeshFrame::~MeshFrame() = default;

@@ -28,12 +28,18 @@ class MeshFrame final : public knit::FrameProvider {
   // FrameProvider: x, y in pattern space; an orthonormal frame in world space.
   // Points outside every UV triangle get the frame of the nearest one.
   void frame(float x, float y, knit::Vec3& t, knit::Vec3& b, knit::Vec3& n) const override;
+  // Normal curvature along x and y in 1/pattern units (> 0 convex), from the
+  // triangle under (x, y): constant per triangle (uv_derivatives). Baked
+  // frames: 0 (unknown).
+  knit::Vec3 curvature(float x, float y) const override;
 
   // The same in UV, reporting whether uv lies inside a triangle (exact mode)
   // or inside a covered texel (baked mode).
   bool lookup(Vec2 uv, Frame& f) const;
 
   float uv_scale() const { return uv_scale_; }
+  // Bytes held besides the mesh: the UV grid and per-triangle tables, or the baked image.
+  size_t memory_bytes() const;
   bool is_baked() const { return !mesh_; }
 
  private:
@@ -42,8 +48,20 @@ class MeshFrame final : public knit::FrameProvider {
   std::shared_ptr<const TriangleMesh> mesh_;
   std::unique_ptr<UvTriangleGrid> grid_;
   std::unique_ptr<Baked> baked_;
+  std::vector<Vec2> curvature_;  // per triangle, 1/pattern units (exact mode)
   float uv_scale_ = 1;
 };
+
+// Derivatives on one triangle with respect to the UV coordinates: of the
+// position and of the (unnormalised, linearly interpolated) vertex normal.
+struct UvDerivatives {
+  Vec3 dpdu, dpdv, dndu, dndv;
+  // Normal curvatures along +u and +v (1 / world units, > 0 convex).
+  float curvature_u() const { return dot(dndu, dpdu) / dot(dpdu, dpdu); }
+  float curvature_v() const { return dot(dndv, dpdv) / dot(dpdv, dpdv); }
+};
+// False when the triangle has (almost) no UV area or the mesh has no UVs.
+bool uv_derivatives(const TriangleMesh& mesh, size_t tri, UvDerivatives& d);
 
 // Exact frame of `mesh` at barycentrics (b1, b2) of triangle `tri`: the
 // interpolated normal, the interpolated tangent orthogonalised against it,

@@ -1,6 +1,9 @@
-// Scene file parser: the "knit" material (docs/scene-format.md#knit).
-// Rendering it is phase 2; parsing and validation are complete now.
+// Scene file parser: the "knit" material (docs/scene-format.md#knit). The
+// knit model (knit::KnitMaterial) is built here, so every parameter is
+// validated by the library at parse time; its messages are reported against
+// the JSON field they concern.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 
 #include "knit/pattern.h"
@@ -54,14 +57,60 @@ static std::vector<int32_t> parse_pattern_row(const JsonNode& row) {
   return cells;
 }
 
+namespace {
+
+// The JSON field a knit-library validation message is about: "stitch
+// parameter r ..." -> "r", "YarnBsdfParams.eta = ..." -> "bsdf.eta",
+// "PlyParams.ply_count = ..." -> "ply.ply_count"; empty when unknown.
+std::string field_of_library_error(const std::string& msg) {
+  const std::string stitch = "stitch parameter ";
+  if (msg.rfind(stitch, 0) == 0 && msg.size() > stitch.size()) return std::string(1, msg[stitch.size()]);
+  auto name_after = [&](const std::string& prefix) {
+    size_t e = prefix.size();
+    while (e < msg.size() && (std::isalnum(static_cast<unsigned char>(msg[e])) || msg[e] == '_')) ++e;
+    return msg.substr(prefix.size(), e - prefix.size());
+  };
+  if (msg.rfind("YarnBsdfParams.", 0) == 0) {
+    const std::string f = name_after("YarnBsdfParams.");
+    if (f == "reflect_colors") return "yarn_colors";
+    if (f == "transmit_colors") return "transmit_colors";
+    return "bsdf." + f;
+  }
+  if (msg.rfind("PlyParams.", 0) == 0) {
+    const std::string f = name_after("PlyParams.");
+    return f == "yarn_radius" ? "r" : "ply." + f;
+  }
+  if (msg.rfind("KnitMaterialParams.bsdf:", 0) == 0) return "yarn_colors";
+  if (msg.rfind("KnitMaterialParams.", 0) == 0) {
+    const std::string f = name_after("KnitMaterialParams.");
+    if (f == "capm_options") return "capm_options";
+    return f;
+  }
+  return "";
+}
+
+constexpr double kDegPerRad = 57.29577951308232;
+// |ply_twist|, |fiber_twist| <= 1.4 rad (PlyParams::validate), in degrees.
+constexpr double kMaxTwistDeg = 80.2;
+
+}  // namespace
+
 KnitDesc parse_knit_material(JsonObject& o, const std::string& dir) {
   KnitDesc k;
+  const std::string& file = o.node().file();
   JsonNode pat = o.at("pattern");
+  Pattern pattern;
   if (pat.is_string()) {
-    k.pattern_file = resolve_input_file(pat, dir);
+    k.pattern_source = resolve_input_file(pat, dir);
     if (o.has("colors"))
       o.at("colors").fail("cannot be given with a pattern file (put a \"colors:\" block in the file)");
+    try {
+      pattern = Pattern::from_file(k.pattern_source);
+    } catch (const std::exception& e) {
+      pat.fail(e.what());  // "<pattern file>:<line>:<column>: <message>"
+    }
   } else if (pat.is_array()) {
+    k.pattern_source = "<inline>";
     auto rows = pat.elements(1, static_cast<size_t>(Pattern::kMaxRows));
     for (size_t i = 0; i < rows.size(); ++i) {
       std::vector<int32_t> cells = parse_pattern_row(rows[i]);
@@ -80,65 +129,119 @@ KnitDesc parse_knit_material(JsonObject& o, const std::string& dir) {
           k.colors.push_back(static_cast<int32_t>(c.integer(0, Pattern::kMaxColors - 1)));
       }
     }
+    try {
+      pattern = Pattern(k.rows, k.cols, k.codes, k.colors);
+    } catch (const std::exception& e) {
+      pat.fail(e.what());
+    }
   } else {
     pat.fail("must be a pattern file path or an array of rows, got " + pat.type_name());
   }
 
+  knit::KnitMaterialParams mp;
   // Two checks per parameter so the messages read "must be > 0, got -1".
-  auto param = [&](const char* key, const Range& sign, double max_abs, float def) {
-    auto n = o.get(key);
+  auto param = [&](JsonObject& obj, const char* key, const Range& sign, double max_abs, float def) {
+    auto n = obj.get(key);
     if (!n) return def;
     const float v = n->number_f(sign);
     if (std::fabs(v) > max_abs) n->fail("must be at most " + fmt_num(max_abs) + " in magnitude, got " + fmt_num(v));
     return v;
   };
-  k.a = param("a", Range::positive(), 1e3, k.a);
-  k.h = param("h", Range::positive(), 1e3, k.h);
-  k.d = param("d", Range::not_zero(), 1e3, k.d);
-  k.r = param("r", Range::positive(), 1e3, k.r);
+  mp.stitch.a = param(o, "a", Range::positive(), 1e3, mp.stitch.a);
+  mp.stitch.h = param(o, "h", Range::positive(), 1e3, mp.stitch.h);
+  mp.stitch.d = param(o, "d", Range::not_zero(), 1e3, mp.stitch.d);
+  mp.stitch.r = param(o, "r", Range::positive(), 1e3, mp.stitch.r);
   if (!o.has("uv_scale")) o.fail("missing required key 'uv_scale'");
-  k.uv_scale = param("uv_scale", Range::positive(), 1e6, 0.0f);
+  mp.uv_scale = param(o, "uv_scale", Range::positive(), 1e6, 0.0f);
 
+  // Yarn colours: YarnBsdfParams::reflect_colors (k_x^B) and transmit_colors (k_y^B).
   JsonNode yc = o.at("yarn_colors");
-  for (const JsonNode& c : yc.elements(1, static_cast<size_t>(Pattern::kMaxColors)))
-    k.yarn_colors.push_back(c.rgb(Range::closed(0, 1)));
-  if (!k.colors.empty()) {
-    const int used = 1 + *std::max_element(k.colors.begin(), k.colors.end());
-    if (used > static_cast<int>(k.yarn_colors.size()))
-      yc.fail("the colors matrix uses colour index " + std::to_string(used - 1) + " but only " +
-              std::to_string(k.yarn_colors.size()) + " yarn colours are given");
+  std::vector<knit::Rgb> reflect, transmit;
+  for (const JsonNode& c : yc.elements(1, static_cast<size_t>(Pattern::kMaxColors))) {
+    const Rgb v = c.rgb(Range::closed(0, 1));
+    reflect.push_back({v.r, v.g, v.b});
   }
+  if (auto tc = o.get("transmit_colors")) {
+    for (const JsonNode& c : tc->elements(reflect.size(), reflect.size())) {
+      const Rgb v = c.rgb(Range::closed(0, 1));
+      transmit.push_back({v.r, v.g, v.b});
+    }
+  } else {
+    transmit = reflect;
+  }
+  if (pattern.num_colors() > static_cast<int>(reflect.size()))
+    yc.fail(std::string(k.pattern_source == "<inline>" ? "the colors matrix" : "the pattern file") +
+            " uses colour index " + std::to_string(pattern.num_colors() - 1) + " but only " +
+            std::to_string(reflect.size()) + " yarn colours are given");
+  mp.bsdf.reflect_colors = reflect;
+  mp.bsdf.transmit_colors = transmit;
 
-  if (auto s = o.get("specular")) {
-    JsonObject so(*s);
-    k.specular_roughness = so.number("roughness", Range::left_open(0, 1), k.specular_roughness);
-    k.specular_eta = so.number("eta", Range::left_open(1, 3), k.specular_eta);
-    so.finish();
-  }
-  if (auto b = o.get("body")) {
+  // YarnBsdfParams, field for field.
+  if (auto b = o.get("bsdf")) {
     JsonObject bo(*b);
-    k.body_energy = bo.number("energy", Range::closed(0, 1), k.body_energy);
-    k.body_reflect = bo.number("reflect", Range::closed(0, 1), k.body_reflect);
+    const Range unit_open = Range::left_open(0, 1), unit = Range::closed(0, 1);
+    mp.bsdf.roughness_x = bo.number("roughness_x", unit_open, mp.bsdf.roughness_x);
+    mp.bsdf.roughness_y = bo.number("roughness_y", unit_open, mp.bsdf.roughness_y);
+    mp.bsdf.trans_roughness_x = bo.number("trans_roughness_x", unit_open, mp.bsdf.trans_roughness_x);
+    mp.bsdf.trans_roughness_y = bo.number("trans_roughness_y", unit_open, mp.bsdf.trans_roughness_y);
+    mp.bsdf.eta = bo.number("eta", Range::closed(1, 3), mp.bsdf.eta);
+    mp.bsdf.body_energy = bo.number("body_energy", unit, mp.bsdf.body_energy);
+    mp.bsdf.body_reflect = bo.number("body_reflect", unit, mp.bsdf.body_reflect);
+    mp.bsdf.optical_depth = bo.number("optical_depth", Range::closed(0, 50), mp.bsdf.optical_depth);
     bo.finish();
   }
+  // PlyParams, field for field (angles in degrees); yarn_radius is r.
   if (auto p = o.get("ply")) {
     JsonObject po(*p);
-    k.ply_count = static_cast<int>(po.integer("count", 1, 16, k.ply_count));
-    k.ply_twist = po.number("twist", Range::right_open(0, 90), k.ply_twist);
-    k.ply_shadowing = po.number("shadowing", Range::closed(0, 1), k.ply_shadowing);
+    mp.ply_detail = po.boolean("enabled", true);
+    mp.ply.ply_count = static_cast<int>(po.integer("ply_count", 1, 16, mp.ply.ply_count));
+    mp.ply.ply_radius = po.number("ply_radius", Range::open(0, 1), knit::PlyParams::packed_radius(mp.ply.ply_count));
+    const Range twist = Range::magnitude(kMaxTwistDeg);
+    if (po.has("ply_twist")) mp.ply.ply_twist = static_cast<float>(po.number("ply_twist", twist) / kDegPerRad);
+    mp.ply.fiber_count = static_cast<int>(po.integer("fiber_count", 0, 10000, mp.ply.fiber_count));
+    if (po.has("fiber_twist")) mp.ply.fiber_twist = static_cast<float>(po.number("fiber_twist", twist) / kDegPerRad);
     po.finish();
   }
-  if (auto f = o.get("fiber")) {
-    JsonObject fo(*f);
-    k.fiber_twist = fo.number("twist", Range::right_open(0, 90), k.fiber_twist);
-    k.fiber_shadowing = fo.number("shadowing", Range::closed(0, 1), k.fiber_shadowing);
-    fo.finish();
+  mp.ply.yarn_radius = mp.stitch.r;
+
+  const std::string mode = o.choice("mode", {"near_field", "multi_scale"}, "near_field");
+  mp.mode = mode == "near_field" ? knit::KnitMode::NearField : knit::KnitMode::MultiScale;
+  mp.capm = o.boolean("capm", mp.capm);
+  mp.footprint_points = static_cast<int>(o.integer("footprint_points", 1, KNIT_MS_MAX_POINTS, mp.footprint_points));
+  if (auto c = o.get("capm_options")) {
+    JsonObject co(*c);
+    mp.capm_options.max_steps = static_cast<int>(co.integer("max_steps", 1, 4096, mp.capm_options.max_steps));
+    mp.capm_options.max_segment = co.number("max_segment", Range::left_open(0, 1e3), mp.capm_options.max_segment);
+    mp.capm_options.max_bend = co.number("max_bend", Range::left_open(0, 3.14159265f), mp.capm_options.max_bend);
+    co.finish();
   }
-  const std::string mode = o.choice("mode", {"near_field", "multi_scale"}, "multi_scale");
-  k.mode = mode == "near_field" ? KnitMode::NearField : KnitMode::MultiScale;
-  k.capm = o.boolean("capm", k.capm);
-  k.footprint_samples = static_cast<int>(o.integer("footprint_samples", 1, 1024, k.footprint_samples));
+  if (auto f = o.get("frames")) {
+    const std::string v = f->string();
+    if (v == "exact") {
+      k.frames = KnitFrames::Exact;
+    } else if (v == "curvature") {
+      k.frames = KnitFrames::Curvature;
+    } else {
+      k.frames = KnitFrames::Baked;
+      k.frames_file = resolve_input_file(*f, dir);
+    }
+  }
+  k.explicit_samples = static_cast<int>(o.integer("explicit_samples", 4, 256, k.explicit_samples));
+  k.footprint_scale = o.number("footprint_scale", Range::left_open(0, 16), k.footprint_scale);
+
+  try {
+    k.model = std::make_shared<const knit::KnitMaterial>(std::move(pattern), mp);
+  } catch (const std::invalid_argument& e) {
+    const std::string field = field_of_library_error(e.what());
+    throw SceneError(file, field.empty() ? o.path() : json_child_path(o.path(), field), e.what());
+  }
   return k;
+}
+
+Rgb KnitDesc::base_color() const {
+  if (!model) return Rgb(0.5f);
+  const knit::Rgb c = model->params().bsdf.reflect_colors[0];
+  return {c.r, c.g, c.b};
 }
 
 }  // namespace knit::render

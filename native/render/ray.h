@@ -19,6 +19,9 @@ struct RayDifferential : Ray {
   bool has_differentials = false;
   Vec3 rx_o, rx_d;  // offset ray for x + 1 pixel
   Vec3 ry_o, ry_d;  // offset ray for y + 1 pixel
+  // The offsets are this many pixels apart (the camera scales them with the
+  // sample count; the knit model rescales its footprint to whole pixels).
+  float diff_scale = 1.0f;
 };
 
 }  // namespace knit::render

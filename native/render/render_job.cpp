@@ -40,6 +40,7 @@ RenderJobResult run_render_job(const RenderJob& job, const std::function<void(co
 
   BuildOptions options;
   options.knit_preview_diffuse = job.knit_preview_diffuse;
+  options.explicit_yarns = job.explicit_yarns;
   const Scene scene(desc, options, warnings);
   if (warn)
     for (const std::string& w : warnings.messages) warn(w);
@@ -82,11 +83,26 @@ RenderJobResult run_render_job(const RenderJob& job, const std::function<void(co
   rep.shadow_rays = r.stats.shadow_rays;
   rep.invalid_samples = r.stats.invalid_samples;
   rep.pass_limit = r.stats.pass_limit;
+  rep.resolves = r.stats.resolves;
+  rep.resolve_passes = r.stats.resolve_passes;
+  rep.shadow_resolves = r.stats.shadow_resolves;
   rep.triangles = scene.stats().triangles;
   rep.mesh_bytes = scene.stats().mesh_bytes;
   rep.embree_bytes = scene.accel().embree_bytes();
   rep.embree_peak_bytes = scene.accel().embree_peak_bytes();
   rep.peak_rss_bytes = peak_rss_bytes();
+  const SceneStats& st = scene.stats();
+  rep.knit_materials = st.knit_materials;
+  rep.knit_state_bytes = st.knit_state_bytes;
+  rep.knit_binding_bytes = st.knit_binding_bytes;
+  rep.explicit_yarns = st.explicit_yarns;
+  rep.yarn_points = st.yarn_points;
+  rep.yarn_segments = st.yarn_segments;
+  rep.yarn_curves = st.yarn_curves;
+  rep.yarn_geometry_bytes = st.yarn_geometry_bytes;
+  rep.yarn_shading_bytes = st.yarn_shading_bytes;
+  rep.yarn_build_seconds = st.yarn_build_seconds;
+  rep.embree_yarn_bytes = st.yarn_segments > 0 ? rep.embree_bytes - st.embree_bytes_without_yarns : 0;
   rep.total_seconds = since(t_start);
   if (!job.report_file.empty()) {
     std::ofstream f(job.report_file);

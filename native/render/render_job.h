@@ -21,7 +21,8 @@ struct RenderJob {
   std::optional<uint64_t> seed;
   int threads = 0;
   ProgressMode progress = ProgressMode::Quiet;
-  bool knit_preview_diffuse = false;
+  bool knit_preview_diffuse = false;  // debug: knit materials as diffuse surfaces
+  bool explicit_yarns = false;        // knit materials as explicit yarn tubes
   DisplaySettings display;
 };
 

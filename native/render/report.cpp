@@ -57,6 +57,27 @@ std::string RenderReport::to_text() const {
                 format_bytes(static_cast<double>(embree_peak_bytes)).c_str(),
                 format_bytes(static_cast<double>(mesh_bytes)).c_str(), triangles);
   s += buf;
+  if (knit_materials > 0) {
+    std::snprintf(buf, sizeof buf, "  knit hits   %.2f per sample (%.0f%% passed on), %.2f shadow-ray crossings per sample\n",
+                  samples ? double(resolves) / double(samples) : 0.0,
+                  resolves ? 100.0 * double(resolve_passes) / double(resolves) : 0.0,
+                  samples ? double(shadow_resolves) / double(samples) : 0.0);
+    s += buf;
+    if (explicit_yarns) {
+      std::snprintf(buf, sizeof buf,
+                    "  yarns       explicit: %zu points, %zu segments, %zu curves (built in %.2f s); geometry %s, "
+                    "shading data %s, Embree BVH for them %s\n",
+                    yarn_points, yarn_segments, yarn_curves, yarn_build_seconds,
+                    format_bytes(static_cast<double>(yarn_geometry_bytes)).c_str(),
+                    format_bytes(static_cast<double>(yarn_shading_bytes)).c_str(),
+                    format_bytes(static_cast<double>(embree_yarn_bytes)).c_str());
+    } else {
+      std::snprintf(buf, sizeof buf, "  knit model  %zu material(s): model state %s, per-mesh tables %s\n",
+                    knit_materials, format_bytes(static_cast<double>(knit_state_bytes)).c_str(),
+                    format_bytes(static_cast<double>(knit_binding_bytes)).c_str());
+    }
+    s += buf;
+  }
   if (invalid_samples > 0 || pass_limit > 0) {
     std::snprintf(buf, sizeof buf, "  problems    %llu invalid (NaN/Inf/negative) samples dropped, %llu paths hit the pass-through limit\n",
                   static_cast<unsigned long long>(invalid_samples), static_cast<unsigned long long>(pass_limit));
@@ -86,7 +107,16 @@ std::string RenderReport::to_json() const {
   j["pass_through_limit_hits"] = pass_limit;
   j["triangles"] = triangles;
   j["memory_bytes"] = {{"peak_rss", peak_rss_bytes}, {"embree", embree_bytes}, {"embree_peak", embree_peak_bytes},
-                       {"meshes", mesh_bytes}};
+                       {"meshes", mesh_bytes},
+                       {"knit_state", knit_state_bytes},
+                       {"knit_binding", knit_binding_bytes},
+                       {"yarn_geometry", yarn_geometry_bytes},
+                       {"yarn_shading", yarn_shading_bytes},
+                       {"embree_yarns", embree_yarn_bytes}};
+  j["knit"] = {{"materials", knit_materials}, {"explicit_yarns", explicit_yarns},
+               {"hits", resolves}, {"hits_passed", resolve_passes}, {"shadow_crossings", shadow_resolves},
+               {"yarn_points", yarn_points}, {"yarn_segments", yarn_segments}, {"yarn_curves", yarn_curves},
+               {"yarn_build_seconds", yarn_build_seconds}};
   return j.dump(2) + "\n";
 }
 

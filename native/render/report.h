@@ -16,9 +16,18 @@ struct RenderReport {
   uint64_t samples = 0;
   uint64_t camera_rays = 0, bounce_rays = 0, shadow_rays = 0;
   uint64_t invalid_samples = 0, pass_limit = 0;
+  uint64_t resolves = 0, resolve_passes = 0, shadow_resolves = 0;
   size_t triangles = 0, mesh_bytes = 0;
   int64_t embree_bytes = 0, embree_peak_bytes = 0;
   int64_t peak_rss_bytes = 0;
+  // Knit materials: the model's state and the renderer's per-mesh tables.
+  size_t knit_materials = 0, knit_state_bytes = 0, knit_binding_bytes = 0;
+  // Explicit yarns: tube geometry, per-point shading data, Embree's BVH for them.
+  bool explicit_yarns = false;
+  size_t yarn_points = 0, yarn_segments = 0, yarn_curves = 0;
+  size_t yarn_geometry_bytes = 0, yarn_shading_bytes = 0;
+  int64_t embree_yarn_bytes = 0;
+  double yarn_build_seconds = 0;
 
   uint64_t total_rays() const { return camera_rays + bounce_rays + shadow_rays; }
   double samples_per_second() const { return render_seconds > 0 ? samples / render_seconds : 0; }

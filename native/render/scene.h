@@ -14,9 +14,12 @@
 namespace knit::render {
 
 struct BuildOptions {
-  // Render knit materials as diffuse surfaces of their base colour instead
-  // of refusing the scene (the knit model itself is phase 2).
+  // Debug: render knit materials as diffuse surfaces of their first yarn
+  // colour instead of with the knit model.
   bool knit_preview_diffuse = false;
+  // Render knit materials as explicit yarn tubes (ground truth); also set by
+  // the scene's integrator.explicit_yarns.
+  bool explicit_yarns = false;
 };
 
 struct SceneStats {
@@ -25,6 +28,17 @@ struct SceneStats {
   size_t mesh_bytes = 0;     // our vertex/index data
   double load_seconds = 0;   // mesh and image loading
   double build_seconds = 0;  // Embree BVH build
+  // The knit model (docs/renderer.md#report).
+  size_t knit_materials = 0;       // knit materials used by objects
+  size_t knit_state_bytes = 0;     // KnitMaterial::state_bytes() summed over them
+  size_t knit_binding_bytes = 0;   // per-mesh tables of the renderer (scale, curvature, MeshFrame)
+  // Explicit yarns (--explicit-yarns).
+  bool explicit_yarns = false;
+  size_t yarn_points = 0, yarn_segments = 0, yarn_curves = 0;
+  size_t yarn_geometry_bytes = 0;  // Embree vertex/index/flag buffers of the tubes
+  size_t yarn_shading_bytes = 0;   // per-point colour, arc length, fabric normal
+  double yarn_build_seconds = 0;   // making the tubes (curves, mapping onto the meshes)
+  int64_t embree_bytes_without_yarns = 0;  // Embree's memory before the tubes were added
 };
 
 class Scene {

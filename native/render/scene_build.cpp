@@ -3,9 +3,13 @@
 #include <cmath>
 #include <map>
 
+#include "render/curve_shape.h"
+#include "render/material_explicit_yarn.h"
+#include "render/material_knit.h"
 #include "render/materials.h"
 #include "render/scene.h"
 #include "render/triangle_shape.h"
+#include "render/yarn_tubes.h"
 
 namespace knit::render {
 
@@ -14,19 +18,15 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-std::unique_ptr<Material> make_material(const MaterialDesc& m, const std::string& file,
-                                        const BuildOptions& options) {
+// The material of a desc. A knit material gets its diffuse preview here
+// (used only with --knit-preview-diffuse); objects carrying the knit model or
+// explicit yarns get materials of their own (Scene::Scene).
+std::unique_ptr<Material> make_material(const MaterialDesc& m, const std::string& file) {
   switch (m.type) {
     case MaterialType::Diffuse: return std::make_unique<DiffuseMaterial>(m.diffuse.albedo);
     case MaterialType::Dielectric: return std::make_unique<SmoothDielectricMaterial>(m.dielectric);
     case MaterialType::Thin: return std::make_unique<ThinMaterial>(m.thin);
-    case MaterialType::Knit:
-      if (!options.knit_preview_diffuse)
-        throw SceneError(file, m.path,
-                         "rendering the knit material is not implemented yet (phase 2 of the "
-                         "native renderer); pass --knit-preview-diffuse to render it as a diffuse "
-                         "surface of its base colour (yarn_colors[0])");
-      return std::make_unique<DiffuseMaterial>(m.knit.base_color());
+    case MaterialType::Knit: return std::make_unique<DiffuseMaterial>(m.knit.base_color());
   }
   throw SceneError(file, m.path, "unknown material type");
 }
@@ -36,9 +36,18 @@ Scene::Scene(const SceneDesc& desc, const BuildOptions& options, Warnings& warni
     : desc_(desc), accel_(std::make_unique<Accel>()), camera_(desc.camera, desc.film.width, desc.film.height) {
   const auto t_load = std::chrono::steady_clock::now();
   for (const MaterialDesc& m : desc.materials) {
-    materials_.push_back(make_material(m, desc.file, options));
+    materials_.push_back(make_material(m, desc.file));
     if (materials_.back()->can_pass_through()) has_pass_through_ = true;
   }
+  const bool explicit_yarns = (options.explicit_yarns || desc.integrator.explicit_yarns) && !options.knit_preview_diffuse;
+  stats_.explicit_yarns = explicit_yarns;
+  std::vector<char> knit_used(desc.materials.size(), 0);
+  struct YarnJob {
+    std::shared_ptr<const TriangleMesh> mesh;
+    const MaterialDesc* material;
+    const ObjectDesc* object;
+  };
+  std::vector<YarnJob> yarn_jobs;
 
   std::map<std::string, std::shared_ptr<const TriangleMesh>> cache;
   for (const ObjectDesc& o : desc.objects) {
@@ -61,8 +70,26 @@ Scene::Scene(const SceneDesc& desc, const BuildOptions& options, Warnings& warni
                            "' needs");
     auto mesh = o.transform.is_identity() ? base
                                           : std::make_shared<const TriangleMesh>(transform_mesh(*base, o.transform));
+    int material = o.material;
+    if (md.type == MaterialType::Knit && !options.knit_preview_diffuse) {
+      if (!knit_used[size_t(o.material)]) {
+        knit_used[size_t(o.material)] = 1;
+        ++stats_.knit_materials;
+        stats_.knit_state_bytes += md.knit.model->state_bytes();
+      }
+      if (explicit_yarns) {
+        yarn_jobs.push_back({mesh, &md, &o});
+        continue;  // the base mesh is only the top of the yarn shell: the tubes replace it
+      }
+      const std::string where = desc.file + ": " + o.path + " (" + o.name + ")";
+      auto km = std::make_unique<KnitModelMaterial>(md.knit, mesh, desc.file, md.path, o.path, where, warnings);
+      stats_.knit_binding_bytes += km->binding_bytes();
+      materials_.push_back(std::move(km));
+      has_pass_through_ = true;
+      material = static_cast<int>(materials_.size()) - 1;
+    }
     stats_.mesh_bytes += mesh->memory_bytes();
-    accel_->add(std::make_unique<TriangleShape>(mesh), o.material, -1);
+    accel_->add(std::make_unique<TriangleShape>(mesh), material, -1);
   }
   stats_.meshes_loaded = cache.size();
 
@@ -93,14 +120,53 @@ Scene::Scene(const SceneDesc& desc, const BuildOptions& options, Warnings& warni
   }
   stats_.load_seconds = seconds_since(t_load);
 
-  const auto t_build = std::chrono::steady_clock::now();
-  try {
-    accel_->commit();
-  } catch (const std::exception& e) {
-    throw SceneError(desc.file, "", std::string("cannot build the acceleration structure: ") + e.what());
+  auto commit = [&] {
+    const auto t_build = std::chrono::steady_clock::now();
+    try {
+      accel_->commit();
+    } catch (const std::exception& e) {
+      throw SceneError(desc.file, "", std::string("cannot build the acceleration structure: ") + e.what());
+    }
+    stats_.build_seconds += seconds_since(t_build);
+  };
+  commit();
+  if (!yarn_jobs.empty()) {
+    // Explicit yarns: built and added after the rest, so that Embree's
+    // memory for the tubes can be told apart from the rest of the scene's.
+    stats_.embree_bytes_without_yarns = accel_->embree_bytes();
+    const auto t_yarns = std::chrono::steady_clock::now();
+    std::map<const MaterialDesc*, int> yarn_material;
+    for (const YarnJob& job : yarn_jobs) {
+      auto it = yarn_material.find(job.material);
+      if (it == yarn_material.end()) {
+        materials_.push_back(std::make_unique<ExplicitYarnMaterial>(job.material->knit.model));
+        it = yarn_material.emplace(job.material, static_cast<int>(materials_.size()) - 1).first;
+      }
+      std::shared_ptr<const YarnTubes> tubes;
+      try {
+        tubes = std::make_shared<const YarnTubes>(
+            build_yarn_tubes(*job.mesh, *job.material->knit.model, job.material->knit.explicit_samples));
+      } catch (const std::exception& e) {
+        throw SceneError(desc.file, job.object->path + ".mesh",
+                         std::string("explicit yarns of ") + job.material->path + ": " + e.what());
+      }
+      if (tubes->segments.empty()) {
+        warnings.add(desc.file + ": " + job.object->path + ": no explicit yarn of " + job.material->path +
+                     " lies on the mesh (is uv_scale too small for its UV range?)");
+        continue;
+      }
+      stats_.yarn_points += tubes->num_points();
+      stats_.yarn_segments += tubes->segments.size();
+      stats_.yarn_curves += tubes->curves;
+      stats_.yarn_geometry_bytes += tubes->geometry_bytes();
+      stats_.yarn_shading_bytes += tubes->shading_bytes();
+      accel_->add(std::make_unique<CurveShape>(tubes), it->second, -1);
+      has_pass_through_ = true;
+    }
+    stats_.yarn_build_seconds = seconds_since(t_yarns);
+    commit();
   }
-  stats_.build_seconds = seconds_since(t_build);
-  stats_.triangles = accel_->num_primitives();
+  stats_.triangles = accel_->num_primitives() - stats_.yarn_segments;
 
   Vec3 lo, hi;
   accel_->bounds(lo, hi);

@@ -5,8 +5,11 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
+
+#include "knit/shading.h"
 
 #include "render/errors.h"
 #include "render/transform.h"
@@ -35,6 +38,9 @@ struct IntegratorDesc {
   int max_depth = 8;  // scattering events per path (1 = direct light only)
   int rr_depth = 3;   // Russian roulette starts after this many bounces
   Strategy strategy = Strategy::Mis;
+  // Render knit materials as explicit yarn tubes (the ground truth) instead
+  // of with the knit model (also `knitshade render --explicit-yarns`).
+  bool explicit_yarns = false;
 };
 
 enum class LightType { Quad, Point, Directional, EnvironmentMap, EnvironmentUniform };
@@ -78,34 +84,29 @@ struct ThinDesc {
   Rgb albedo{0.0f};
 };
 
-enum class KnitMode { NearField, MultiScale };
+// Where CAPM takes the base mesh's frame from (docs/scene-format.md#knit).
+enum class KnitFrames {
+  Exact,      // MeshFrame: exact lookups on the mesh (flat meshes need none)
+  Curvature,  // the hit's frame turned with the mesh's curvature at the hit (no lookups)
+  Baked,      // MeshFrame over a frame image written by `knitshade bake-frames`
+};
 
+// The knit material: the knit model (knit::KnitMaterial, built and validated
+// at parse time) plus what the renderer needs to put it on meshes.
 struct KnitDesc {
-  // Pattern: either a file (pattern_file set) or an inline matrix.
-  std::string pattern_file;  // resolved path; empty for an inline pattern
-  int rows = 0, cols = 0;    // inline patterns only
-  std::vector<int32_t> codes;   // inline: row-major, 0 knit, 1 purl, 2 front, 3 back
-  std::vector<int32_t> colors;  // inline: row-major colour indices, empty if none given
-  // Stitch curve (paper Eq. 2) and tube radius, pattern-space units.
-  float a = 1.5f, h = 4.0f, d = 1.0f, r = 0.75f;
-  float uv_scale = 1.0f;         // pattern units per UV unit
-  std::vector<Rgb> yarn_colors;  // one per colour index
-  // Yarn appearance (near-field model, paper Sec. 3.2).
-  float specular_roughness = 0.3f;
-  float specular_eta = 1.46f;
-  float body_energy = 0.8f;       // B
-  float body_reflect = 0.5f;      // r: reflected share of the body energy
-  int ply_count = 3;
-  float ply_twist = 30;           // degrees
-  float ply_shadowing = 0.5f;     // [0, 1]
-  float fiber_twist = 15;         // degrees
-  float fiber_shadowing = 0.3f;   // [0, 1]
-  KnitMode mode = KnitMode::MultiScale;
-  bool capm = true;
-  int footprint_samples = 16;
+  std::shared_ptr<const knit::KnitMaterial> model;
+  std::string pattern_source;  // the resolved pattern file, or "<inline>"
+  // Inline patterns only (as written in the scene): row-major codes and colours.
+  int rows = 0, cols = 0;
+  std::vector<int32_t> codes;
+  std::vector<int32_t> colors;
+  KnitFrames frames = KnitFrames::Exact;
+  std::string frames_file;     // KnitFrames::Baked: the resolved frame image
+  int explicit_samples = 32;   // explicit-yarn mode: polyline points per stitch
+  float footprint_scale = 1;   // multi-scale footprint, in pixels (whatever the spp)
 
-  // The colour a diffuse preview uses: yarn_colors[0].
-  Rgb base_color() const { return yarn_colors.empty() ? Rgb(0.5f) : yarn_colors[0]; }
+  // The colour a diffuse preview uses: the first yarn colour.
+  Rgb base_color() const;
 };
 
 struct MaterialDesc {

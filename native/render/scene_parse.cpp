@@ -58,6 +58,7 @@ static IntegratorDesc parse_integrator(JsonObject o) {
   d.rr_depth = static_cast<int>(o.integer("rr_depth", 1, 1024, d.rr_depth));
   const std::string s = o.choice("strategy", {"mis", "nee", "bsdf"}, "mis");
   d.strategy = s == "nee" ? Strategy::Nee : (s == "bsdf" ? Strategy::Bsdf : Strategy::Mis);
+  d.explicit_yarns = o.boolean("explicit_yarns", false);
   o.finish();
   return d;
 }

@@ -25,6 +25,7 @@ class UvTriangleGrid {
   Vec2 uv_min() const { return lo_; }
   Vec2 uv_max() const { return hi_; }
   size_t num_triangles() const { return tri_count_; }
+  size_t memory_bytes() const { return (cell_start_.size() + cell_tris_.size()) * sizeof(uint32_t); }
 
  private:
   void cell_of(Vec2 uv, int& cx, int& cy) const;

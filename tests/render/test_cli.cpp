@@ -100,22 +100,69 @@ TEST(Cli, BadSceneGivesOneLineAndExitCode1) {
   EXPECT_NE(syntax.err.find("syntax.json:1:10: JSON syntax error"), std::string::npos) << syntax.err;
 }
 
-TEST(Cli, KnitNeedsThePreviewFlag) {
+TEST(Cli, RendersKnitWithTheModelAndAsExplicitYarns) {
   const std::string dir = test::test_dir();
   const std::string scene = test::write_file(
       dir, "scene.json",
       small_scene(R"({"type": "knit", "pattern": ["KP", "PK"], "uv_scale": 12, "yarn_colors": [[0.7, 0.1, 0.1]]})"));
-  const CliRun r = run(dir, "render " + scene + " -o " + dir + "/knit.png --quiet");
-  EXPECT_EQ(r.code, 1);
-  EXPECT_EQ(lines(r.err), 1) << r.err;
-  EXPECT_NE(r.err.find("materials.m: rendering the knit material is not implemented yet"), std::string::npos) << r.err;
-  EXPECT_FALSE(std::filesystem::exists(dir + "/knit.png"));
-
-  const CliRun p = run(dir, "render " + scene + " -o " + dir + "/knit.exr --quiet --knit-preview-diffuse");
+  // The knit model: its state is reported; no yarn geometry.
+  const CliRun m = run(dir, "render " + scene + " -o " + dir + "/model.exr --quiet --report " + dir + "/model.json");
+  ASSERT_EQ(m.code, 0) << m.err;
+  const nlohmann::json rm = nlohmann::json::parse(test::read_file(dir + "/model.json"));
+  EXPECT_EQ(rm["knit"]["materials"], 1);
+  EXPECT_EQ(rm["knit"]["explicit_yarns"], false);
+  EXPECT_GT(rm["knit"]["hits"].get<uint64_t>(), 0u);
+  EXPECT_GT(rm["memory_bytes"]["knit_state"].get<uint64_t>(), 0u);
+  EXPECT_EQ(rm["memory_bytes"]["yarn_geometry"], 0);
+  EXPECT_EQ(rm["triangles"], 2);
+  // The diffuse preview (a debug option) renders the quad in its first yarn colour ...
+  const CliRun p = run(dir, "render " + scene + " -o " + dir + "/preview.exr --quiet --knit-preview-diffuse");
   ASSERT_EQ(p.code, 0) << p.err;
-  const RgbImage img = read_rgb_image(dir + "/knit.exr");
-  const Rgb c = img.at(12, 8);
-  EXPECT_GT(c.r, 2 * c.g);  // the red base colour
+  auto red_pixels = [](const RgbImage& img) {
+    int n = 0;
+    for (const Rgb& c : img.pixels) n += c.r > 1.5f * c.b;
+    return n;
+  };
+  const int preview_red = red_pixels(read_rgb_image(dir + "/preview.exr"));
+  EXPECT_GT(preview_red, 30);
+  // ... and the model covers part of it with red yarn: the sky shows through the gaps.
+  const int model_red = red_pixels(read_rgb_image(dir + "/model.exr"));
+  EXPECT_GT(model_red, preview_red / 10);
+  EXPECT_LT(model_red, preview_red);
+
+  // Explicit yarns: tube geometry and its BVH are reported apart from the rest.
+  const CliRun e = run(dir, "render " + scene + " -o " + dir + "/explicit.exr --quiet --explicit-yarns --report " + dir +
+                                "/explicit.json");
+  ASSERT_EQ(e.code, 0) << e.err;
+  const nlohmann::json re = nlohmann::json::parse(test::read_file(dir + "/explicit.json"));
+  EXPECT_EQ(re["knit"]["explicit_yarns"], true);
+  EXPECT_GT(re["knit"]["yarn_segments"].get<uint64_t>(), 100u);
+  EXPECT_GT(re["memory_bytes"]["yarn_geometry"].get<uint64_t>(), 16 * re["knit"]["yarn_points"].get<uint64_t>() - 1);
+  EXPECT_GT(re["memory_bytes"]["embree_yarns"].get<int64_t>(), 0);
+  EXPECT_EQ(re["triangles"], 0);  // the base mesh is replaced by the tubes
+
+}
+
+TEST(Cli, CompareReportsLinearErrors) {
+  const std::string dir = test::test_dir();
+  RgbImage a(4, 2), b(4, 2);
+  for (size_t i = 0; i < a.pixels.size(); ++i) {
+    a.pixels[i] = Rgb(0.5f);
+    b.pixels[i] = Rgb(i < 4 ? 0.5f : 0.3f);
+  }
+  write_float_image(dir + "/a.exr", a);
+  write_float_image(dir + "/b.exr", b);
+  const CliRun r = run(dir, "compare " + dir + "/a.exr " + dir + "/b.exr");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_NEAR(j["mae"].get<double>(), 0.1, 1e-6);
+  EXPECT_NEAR(j["rmse"].get<double>(), std::sqrt(0.02), 1e-6);
+  EXPECT_NEAR(j["bias"].get<double>(), 0.1, 1e-6);
+  EXPECT_NEAR(j["rel_bias"].get<double>(), 0.25, 1e-6);
+  EXPECT_EQ(run(dir, "compare " + dir + "/a.exr").code, 2);
+  const CliRun missing = run(dir, "compare " + dir + "/a.exr " + dir + "/none.exr");
+  EXPECT_EQ(missing.code, 1);
+  EXPECT_NE(missing.err.find("none.exr"), std::string::npos) << missing.err;
 }
 
 TEST(Cli, UsageErrorsExitWith2AndBadOutputFailsBeforeRendering) {

@@ -9,6 +9,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <algorithm>
@@ -80,6 +81,9 @@ TEST_P(Golden, MatchesReference) {
   RenderSettings s;
   s.spp = desc.film.spp;
   s.seed = desc.film.seed;
+  // KNIT_GOLDEN_SEED renders another seed: how the thresholds are calibrated
+  // (run the test with KNIT_GOLDEN_SEED=1..6 and take about twice the worst).
+  if (const char* seed = std::getenv("KNIT_GOLDEN_SEED")) s.seed = std::strtoull(seed, nullptr, 10);
   const RenderResult r = render_image(scene, s);
   EXPECT_EQ(r.stats.invalid_samples, 0u);
 

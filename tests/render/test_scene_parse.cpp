@@ -57,7 +57,7 @@ TEST(SceneParse, ValidSceneParses) {
   EXPECT_EQ(wool.knit.rows, 2);
   EXPECT_EQ(wool.knit.cols, 4);
   EXPECT_EQ(wool.knit.codes, (std::vector<int32_t>{0, 0, 1, 1, 1, 1, 0, 0}));
-  EXPECT_FLOAT_EQ(wool.knit.uv_scale, 10.0f);
+  EXPECT_FLOAT_EQ(wool.knit.model->params().uv_scale, 10.0f);
 }
 
 TEST(SceneParse, SyntaxErrorGivesLineAndColumn) {
@@ -196,15 +196,87 @@ TEST(SceneParse, KnitParameterRanges) {
   EXPECT_NE(knit_error("mode", "far").find("materials.wool.mode: must be one of \"near_field\", \"multi_scale\""),
             std::string::npos);
   EXPECT_NE(knit_error("capm", 1).find("materials.wool.capm: must be true or false, got number"), std::string::npos);
-  EXPECT_NE(knit_error("footprint_samples", 0).find("materials.wool.footprint_samples: must be in [1, 1024], got 0"),
+  EXPECT_NE(knit_error("footprint_points", 0).find("materials.wool.footprint_points: must be in [1, 64], got 0"),
             std::string::npos);
-  EXPECT_NE(knit_error("specular", {{"roughness", 0}}).find("materials.wool.specular.roughness: must be in (0, 1], got 0"),
+  EXPECT_NE(knit_error("bsdf", {{"roughness_x", 0}}).find("materials.wool.bsdf.roughness_x: must be in (0, 1], got 0"),
             std::string::npos);
-  EXPECT_NE(knit_error("ply", {{"count", 3}, {"twist", 90}}).find("materials.wool.ply.twist: must be in [0, 90), got 90"),
+  EXPECT_NE(knit_error("bsdf", {{"eta", 0.5}}).find("materials.wool.bsdf.eta: must be in [1, 3], got 0.5"),
             std::string::npos);
-  EXPECT_NE(knit_error("fiber", {{"shade", 1}}).find("materials.wool.fiber.shade: unknown key"), std::string::npos);
-  EXPECT_NE(knit_error("body", {{"energy", -0.1}}).find("materials.wool.body.energy: must be in [0, 1], got -0.1"),
+  EXPECT_NE(knit_error("bsdf", {{"body_energy", -0.1}}).find("materials.wool.bsdf.body_energy: must be in [0, 1], got -0.1"),
             std::string::npos);
+  EXPECT_NE(knit_error("bsdf", {{"roughness", 0.3}}).find("materials.wool.bsdf.roughness: unknown key"), std::string::npos);
+  EXPECT_NE(knit_error("ply", {{"ply_count", 3}, {"ply_twist", 90}}).find("materials.wool.ply.ply_twist: must be in [-80.2, 80.2], got 90"),
+            std::string::npos);
+  EXPECT_NE(knit_error("ply", {{"ply_count", 0}}).find("materials.wool.ply.ply_count: must be in [1, 16], got 0"),
+            std::string::npos);
+  EXPECT_NE(knit_error("ply", {{"shade", 1}}).find("materials.wool.ply.shade: unknown key"), std::string::npos);
+  EXPECT_NE(knit_error("transmit_colors", json::array({{0.5, 0.5, 0.5}, {0.1, 0.1, 0.1}})).find(
+                "materials.wool.transmit_colors: must have 1 elements, got 2"),
+            std::string::npos);
+  EXPECT_NE(knit_error("explicit_samples", 2).find("materials.wool.explicit_samples: must be in [4, 256], got 2"),
+            std::string::npos);
+  EXPECT_NE(knit_error("frames", "nope.exr").find("materials.wool.frames: file not found"), std::string::npos);
+  // The library's own checks, reported against the field: r beyond the curve's clearance.
+  const std::string clearance = knit_error("r", 0.9);
+  EXPECT_NE(clearance.find("scene.json: materials.wool.r: stitch parameter r = 0.9 makes yarn tubes pass through each other"),
+            std::string::npos)
+      << clearance;
+}
+
+TEST(SceneParse, KnitMaterialMapsOntoTheModel) {
+  json j = base_scene();
+  j["materials"]["wool"] = json::parse(R"({"type": "knit", "pattern": ["KP"], "uv_scale": 20, "a": 1.4, "h": 3.5,
+      "d": -0.8, "r": 0.5, "yarn_colors": [[0.5, 0.4, 0.3]], "transmit_colors": [[0.2, 0.3, 0.4]],
+      "bsdf": {"roughness_x": 0.2, "roughness_y": 0.5, "trans_roughness_x": 0.35, "trans_roughness_y": 0.65,
+               "eta": 1.4, "body_energy": 0.9, "body_reflect": 0.3, "optical_depth": 2},
+      "ply": {"ply_count": 2, "ply_twist": 45, "fiber_count": 20, "fiber_twist": -10},
+      "mode": "multi_scale", "capm": false, "footprint_points": 8, "frames": "curvature", "explicit_samples": 12})");
+  const SceneDesc d = parse(j);
+  const KnitDesc& k = d.materials[1].knit;
+  ASSERT_TRUE(k.model);
+  const knit::KnitMaterialParams& p = k.model->params();
+  EXPECT_FLOAT_EQ(p.stitch.a, 1.4f);
+  EXPECT_FLOAT_EQ(p.stitch.h, 3.5f);
+  EXPECT_FLOAT_EQ(p.stitch.d, -0.8f);
+  EXPECT_FLOAT_EQ(p.stitch.r, 0.5f);
+  EXPECT_FLOAT_EQ(p.uv_scale, 20.0f);
+  EXPECT_FLOAT_EQ(p.bsdf.reflect_colors[0].g, 0.4f);
+  EXPECT_FLOAT_EQ(p.bsdf.transmit_colors[0].b, 0.4f);
+  EXPECT_FLOAT_EQ(p.bsdf.roughness_x, 0.2f);
+  EXPECT_FLOAT_EQ(p.bsdf.roughness_y, 0.5f);
+  EXPECT_FLOAT_EQ(p.bsdf.trans_roughness_x, 0.35f);
+  EXPECT_FLOAT_EQ(p.bsdf.trans_roughness_y, 0.65f);
+  EXPECT_FLOAT_EQ(p.bsdf.eta, 1.4f);
+  EXPECT_FLOAT_EQ(p.bsdf.body_energy, 0.9f);
+  EXPECT_FLOAT_EQ(p.bsdf.body_reflect, 0.3f);
+  EXPECT_FLOAT_EQ(p.bsdf.optical_depth, 2.0f);
+  EXPECT_EQ(p.ply.ply_count, 2);
+  EXPECT_FLOAT_EQ(p.ply.ply_radius, knit::PlyParams::packed_radius(2));
+  EXPECT_NEAR(p.ply.ply_twist, 0.785398f, 1e-5f);
+  EXPECT_EQ(p.ply.fiber_count, 20);
+  EXPECT_NEAR(p.ply.fiber_twist, -0.174533f, 1e-5f);
+  EXPECT_FLOAT_EQ(p.ply.yarn_radius, 0.5f);
+  EXPECT_EQ(p.mode, knit::KnitMode::MultiScale);
+  EXPECT_FALSE(p.capm);
+  EXPECT_EQ(p.footprint_points, 8);
+  EXPECT_EQ(k.frames, KnitFrames::Curvature);
+  EXPECT_EQ(k.explicit_samples, 12);
+  EXPECT_EQ(k.model->surface().pattern().cols(), 2);
+}
+
+TEST(SceneParse, KnitPatternFileErrorsNameTheFileLineAndColumn) {
+  const std::string dir = test::test_dir();
+  test::write_file(dir, "bad.knit", "KKPP\nKPXP\n");
+  test::write_file(dir, "two.knit", "KP\nPK\ncolors:\n0 1\n1 0\n");
+  json j = base_scene();
+  j["materials"]["wool"]["pattern"] = "bad.knit";
+  std::string msg = scene_error_of([&] { parse_scene(with_mesh(j, test::mesh("quad.obj")), "scene.json", dir); });
+  EXPECT_NE(msg.find("scene.json: materials.wool.pattern: " + dir + "/bad.knit:2:3:"), std::string::npos) << msg;
+  j["materials"]["wool"]["pattern"] = "two.knit";
+  msg = scene_error_of([&] { parse_scene(with_mesh(j, test::mesh("quad.obj")), "scene.json", dir); });
+  EXPECT_NE(msg.find("scene.json: materials.wool.yarn_colors: the pattern file uses colour index 1 but only 1 yarn colours are given"),
+            std::string::npos)
+      << msg;
 }
 
 TEST(SceneParse, KnitPatterns) {
@@ -315,29 +387,52 @@ TEST(SceneParse, Lights) {
 }
 
 // Errors found while building the scene (meshes, materials) also name the field.
-TEST(SceneBuild, KnitNeedsUvsAndTheExplicitPreviewFlag) {
+TEST(SceneBuild, KnitNeedsUvs) {
   const std::string dir = test::test_dir();
   test::write_file(dir, "no_uv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
   json j = base_scene();
   j["objects"][0]["material"] = "wool";
   const SceneDesc with_uv = parse_scene(with_mesh(j, test::mesh("quad.obj")), "scene.json", dir);
   Warnings w;
-  const std::string msg = scene_error_of([&] { Scene s(with_uv, BuildOptions{}, w); });
-  EXPECT_NE(msg.find("scene.json: materials.wool: rendering the knit material is not implemented yet"), std::string::npos)
-      << msg;
-  EXPECT_NE(msg.find("--knit-preview-diffuse"), std::string::npos);
+  EXPECT_NO_THROW(Scene(with_uv, BuildOptions{}, w));
   BuildOptions preview;
   preview.knit_preview_diffuse = true;
   EXPECT_NO_THROW(Scene(with_uv, preview, w));
+  BuildOptions tubes;
+  tubes.explicit_yarns = true;
+  EXPECT_NO_THROW(Scene(with_uv, tubes, w));
 
   const SceneDesc no_uv = parse_scene(with_mesh(j, "no_uv.obj"), "scene.json", dir);
-  const std::string msg2 = scene_error_of([&] { Scene s(no_uv, preview, w); });
-  EXPECT_NE(msg2.find("scene.json: objects[0].mesh: " + dir + "/no_uv.obj has no UV coordinates, which the knit material 'wool' needs"),
-            std::string::npos)
-      << msg2;
+  for (const BuildOptions& o : {BuildOptions{}, preview, tubes}) {
+    const std::string msg = scene_error_of([&] { Scene s(no_uv, o, w); });
+    EXPECT_NE(msg.find("scene.json: objects[0].mesh: " + dir + "/no_uv.obj has no UV coordinates, which the knit material 'wool' needs"),
+              std::string::npos)
+        << msg;
+  }
+  // UVs without area (every vertex at the same UV) are an error too, for the model and the tubes.
+  test::write_file(dir, "flat_uv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.5 0.5\nf 1/1 2/1 3/1\n");
+  const SceneDesc flat_uv = parse_scene(with_mesh(j, "flat_uv.obj"), "scene.json", dir);
+  for (const BuildOptions& o : {BuildOptions{}, tubes}) {
+    const std::string msg = scene_error_of([&] { Scene s(flat_uv, o, w); });
+    EXPECT_NE(msg.find("scene.json: objects[0].mesh:"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("no triangle has a non-zero UV area"), std::string::npos) << msg;
+  }
   // A diffuse material is fine without UVs.
   j["objects"][0]["material"] = "red";
-  EXPECT_NO_THROW(Scene(parse_scene(with_mesh(j, "no_uv.obj"), "scene.json", dir), preview, w));
+  EXPECT_NO_THROW(Scene(parse_scene(with_mesh(j, "no_uv.obj"), "scene.json", dir), BuildOptions{}, w));
+}
+
+TEST(SceneBuild, ExplicitYarnsThatWouldNotFitNameTheObject) {
+  json j = base_scene();
+  j["objects"][0]["material"] = "wool";
+  j["materials"]["wool"]["uv_scale"] = 1e5;  // 16000 x 22000 stitches on the unit quad
+  const SceneDesc d = parse(j);
+  Warnings w;
+  BuildOptions tubes;
+  tubes.explicit_yarns = true;
+  const std::string msg = scene_error_of([&] { Scene s(d, tubes, w); });
+  EXPECT_NE(msg.find("scene.json: objects[0].mesh: explicit yarns of materials.wool:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("curve points"), std::string::npos) << msg;
 }
 
 TEST(SceneBuild, BadMeshesNameFileAndIndex) {

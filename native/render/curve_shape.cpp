@@ -1,0 +1,86 @@
+#include "render/curve_shape.h"
+
+#include <cmath>
+#include <limits>
+
+namespace knit::render {
+
+CurveShape::CurveShape(std::shared_ptr<const YarnTubes> tubes) : tubes_(std::move(tubes)) {}
+
+unsigned CurveShape::attach(RTCDevice device, RTCScene scene) {
+  const YarnTubes& y = *tubes_;
+  RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_ROUND_LINEAR_CURVE);
+  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, y.vertices.data(), 0,
+                             4 * sizeof(float), y.num_points());
+  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, y.segments.data(), 0, sizeof(uint32_t),
+                             y.segments.size());
+  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_FLAGS, 0, RTC_FORMAT_UCHAR, y.flags.data(), 0, sizeof(uint8_t),
+                             y.flags.size());
+  rtcCommitGeometry(g);
+  const unsigned id = rtcAttachGeometry(scene, g);
+  rtcReleaseGeometry(g);
+  return id;
+}
+
+void CurveShape::bounds(Vec3& lo, Vec3& hi) const {
+  const float inf = std::numeric_limits<float>::infinity();
+  lo = {inf, inf, inf};
+  hi = {-inf, -inf, -inf};
+  const YarnTubes& y = *tubes_;
+  for (size_t i = 0; i < y.num_points(); ++i) {
+    const Vec3 r(y.radius(i), y.radius(i), y.radius(i));
+    lo = vmin(lo, y.point(i) - r);
+    hi = vmax(hi, y.point(i) + r);
+  }
+}
+
+// Tangent at point `end` (0 or 1) of segment `seg`: central differences
+// where the neighbouring segment exists.
+Vec3 CurveShape::tangent_at(size_t seg, size_t end) const {
+  const YarnTubes& y = *tubes_;
+  const size_t k = y.segments[seg] + end;
+  const uint8_t f = y.flags[seg];
+  const bool has_prev = end == 1 || (f & RTC_CURVE_FLAG_NEIGHBOR_LEFT);
+  const bool has_next = end == 0 || (f & RTC_CURVE_FLAG_NEIGHBOR_RIGHT);
+  const Vec3 a = has_prev ? y.point(k - 1) : y.point(k);
+  const Vec3 b = has_next ? y.point(k + 1) : y.point(k);
+  return b - a;
+}
+
+void CurveShape::interaction(const RayDifferential& ray, float t, unsigned prim, float u, float,
+                             SurfaceInteraction& si) const {
+  const YarnTubes& y = *tubes_;
+  const size_t k = y.segments[prim];
+  const Vec3 p0 = y.point(k), p1 = y.point(k + 1);
+  si.t = t;
+  si.prim_id = prim;
+  si.p = ray.o + ray.d * t;
+  // Outward normal: from the closest point of the segment's axis.
+  const Vec3 e = p1 - p0;
+  const float e2 = length2(e);
+  const float w = e2 > 0 ? std::clamp(dot(si.p - p0, e) / e2, 0.0f, 1.0f) : 0.0f;
+  Vec3 n = si.p - (p0 + e * w);
+  const float ln = length(n);
+  n = ln > 0 && std::isfinite(ln) ? n / ln : Frame::from_normal(normalize(e)).t;
+  si.ng = n;
+  const float s = std::clamp(u, 0.0f, 1.0f);
+  Vec3 tan = tangent_at(prim, 0) * (1 - s) + tangent_at(prim, 1) * s;
+  if (!(length2(tan) > 0)) tan = e;
+  si.shading = Frame::from_normal_tangent(n, tan);
+  si.uv = {s, 0};
+  si.has_uv = false;
+  si.footprint.valid = false;
+  // Shading data for the yarn BSDF.
+  const size_t nearest = s < 0.5f ? k : k + 1;
+  si.yarn.color = y.color[nearest];
+  si.yarn.arc = y.arc[k] * (1 - s) + y.arc[k + 1] * s;
+  // Azimuth around the yarn from the fabric normal, as knit::KnitMaterial::shade.
+  const Vec3 tt = si.shading.t;
+  const Vec3 nf = y.fabric_normal[k] * (1 - s) + y.fabric_normal[k + 1] * s;
+  Vec3 ref = nf - tt * dot(nf, tt);
+  if (length(ref) < 1e-4f) ref = Frame::from_normal(tt).t;
+  ref = normalize(ref);
+  si.yarn.phi = std::atan2(dot(n, cross(tt, ref)), dot(n, ref));
+}
+
+}  // namespace knit::render

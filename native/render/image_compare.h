@@ -1,0 +1,34 @@
+// Linear-space error statistics between two renders of the same size: what
+// the model-versus-explicit-yarn tests and benchmarks report, and
+// `knitshade compare` prints.
+#pragma once
+
+#include <string>
+
+#include "render/image.h"
+
+namespace knit::render {
+
+struct ImageStats {
+  double rmse = 0;       // root-mean-square difference over all channel values
+  double mae = 0;        // mean absolute difference
+  double mean_a = 0;     // mean channel value of a
+  double mean_b = 0;     // ... and of b
+  double bias = 0;       // mean_a - mean_b
+  double rel_rmse = 0;   // rmse / mean_b
+  double rel_mae = 0;    // mae / mean_b
+  double rel_bias = 0;   // bias / mean_b
+  int width = 0, height = 0;  // of the compared (block-averaged) images
+  std::string to_json() const;
+};
+
+// a and b must have the same size (std::invalid_argument otherwise). With
+// block > 1, both are first averaged over block x block pixel blocks (partial
+// blocks at the right and bottom edges are dropped): a comparison of
+// structure at a coarser scale, less sensitive to per-pixel noise.
+ImageStats compare_images(const RgbImage& a, const RgbImage& b, int block = 1);
+
+// a averaged over block x block pixel blocks.
+RgbImage block_average(const RgbImage& a, int block);
+
+}  // namespace knit::render

@@ -1,0 +1,164 @@
+#include "render/material_knit.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "render/errors.h"
+
+namespace knit::render {
+
+KnitMeshTables knit_mesh_tables(const TriangleMesh& mesh, float uv_scale) {
+  KnitMeshTables t;
+  const size_t n = mesh.num_triangles();
+  t.triangles.resize(n);
+  std::vector<char> ok(n, 0);
+  double s_sum = 0, total_area = 0;
+  size_t s_count = 0;
+  for (size_t i = 0; i < n; ++i) {
+    UvDerivatives d;
+    if (!uv_derivatives(mesh, i, d)) continue;
+    const float lu = length(d.dpdu), lv = length(d.dpdv);
+    KnitTriangle& tri = t.triangles[i];
+    tri.pattern_per_world = uv_scale / std::sqrt(lu * lv);
+    tri.kx = d.curvature_u();
+    tri.ky = d.curvature_v();
+    if (!std::isfinite(tri.pattern_per_world) || !(tri.pattern_per_world > 0)) continue;
+    if (!std::isfinite(tri.kx)) tri.kx = 0;
+    if (!std::isfinite(tri.ky)) tri.ky = 0;
+    ok[i] = 1;
+    s_sum += tri.pattern_per_world;
+    ++s_count;
+    const Vec2 a = mesh.uvs[mesh.indices[3 * i]], b = mesh.uvs[mesh.indices[3 * i + 1]],
+               c = mesh.uvs[mesh.indices[3 * i + 2]];
+    const double area = 0.5 * std::fabs(double(b.x - a.x) * (c.y - a.y) - double(b.y - a.y) * (c.x - a.x));
+    total_area += area;
+    const float ratio = std::max(lu / lv, lv / lu);
+    if (ratio > 1.1f) {
+      ++t.stretched;
+      t.stretched_area += area;
+    }
+    t.worst_ratio = std::max(t.worst_ratio, ratio);
+  }
+  // Triangles without UV area get the mean scale (a ray can still hit them).
+  const float mean_s = s_count ? float(s_sum / double(s_count)) : uv_scale;
+  for (size_t i = 0; i < n; ++i)
+    if (!ok[i]) t.triangles[i] = KnitTriangle{mean_s, 0, 0};
+  if (total_area > 0) t.stretched_area /= total_area;
+  t.with_uv_area = s_count;
+  t.flat = true;
+  for (const Vec3& nv : mesh.normals)
+    if (length(nv - mesh.normals[0]) > 1e-4f) {
+      t.flat = false;
+      break;
+    }
+  if (t.flat)
+    for (KnitTriangle& tri : t.triangles) tri.kx = tri.ky = 0;
+  return t;
+}
+
+KnitModelMaterial::KnitModelMaterial(const KnitDesc& desc, std::shared_ptr<const TriangleMesh> mesh,
+                                     const std::string& scene_file, const std::string& material_path,
+                                     const std::string& object_path, const std::string& where, Warnings& warnings)
+    : model_(desc.model), mesh_(std::move(mesh)) {
+  const float uv_scale = model_->params().uv_scale;
+  tables_ = knit_mesh_tables(*mesh_, uv_scale);
+  if (tables_.with_uv_area == 0)
+    throw SceneError(scene_file, object_path + ".mesh",
+                     mesh_->file + ": no triangle has a non-zero UV area, which the knit material needs");
+  if (model_->params().mode == knit::KnitMode::MultiScale) {
+    knit::KnitMaterialParams p = model_->params();
+    p.mode = knit::KnitMode::NearField;
+    point_model_ = std::make_shared<const knit::KnitMaterial>(model_->surface().pattern(), p);
+  }
+  min_footprint_ = 1e-4f * model_->surface().cell_width();
+  footprint_scale_ = desc.footprint_scale;
+  if (tables_.stretched > 0) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf,
+                  "%zu of %zu triangles (%.1f%% of the UV area) have |dP/du| and |dP/dv| differing by more than "
+                  "10%% (worst ratio %.2f)",
+                  tables_.stretched, tables_.triangles.size(), 100.0 * tables_.stretched_area, tables_.worst_ratio);
+    warnings.add(where + ": " + mesh_->file + ": " + buf + ": the stitches of " + material_path +
+                 " are stretched there");
+  }
+  if (desc.frames == KnitFrames::Baked) {
+    try {
+      frame_ = MeshFrame::from_baked(desc.frames_file, uv_scale);
+    } catch (const std::exception& e) {
+      throw SceneError(scene_file, material_path + ".frames", e.what());
+    }
+  } else if (desc.frames == KnitFrames::Exact && !tables_.flat) {
+    frame_ = std::make_unique<MeshFrame>(mesh_, uv_scale);
+  }
+}
+
+KnitModelMaterial::~KnitModelMaterial() = default;
+
+size_t KnitModelMaterial::binding_bytes() const {
+  return tables_.triangles.size() * sizeof(KnitTriangle) + (frame_ ? frame_->memory_bytes() : 0);
+}
+
+knit::BaseHit KnitModelMaterial::base_hit(const SurfaceInteraction& si, float diff_scale) const {
+  knit::BaseHit h;
+  h.u = si.uv.x;
+  h.v = si.uv.y;
+  h.t = to_kvec(si.shading.t);
+  h.b = to_kvec(si.shading.b);
+  h.n = to_kvec(si.shading.n);
+  const size_t prim = std::min<size_t>(si.prim_id, tables_.triangles.size() - 1);
+  const KnitTriangle& tri = tables_.triangles[prim];
+  h.pattern_per_world = tri.pattern_per_world;
+  h.kx = tri.kx;
+  h.ky = tri.ky;
+  if (si.footprint.valid && diff_scale > 0) {
+    const float k = footprint_scale_ / diff_scale;
+    h.dudx = si.footprint.dudx * k;
+    h.dvdx = si.footprint.dvdx * k;
+    h.dudy = si.footprint.dudy * k;
+    h.dvdy = si.footprint.dvdy * k;
+  }
+  return h;
+}
+
+const knit::KnitMaterial& KnitModelMaterial::model_for(const knit::BaseHit& h) const {
+  if (!point_model_) return *model_;
+  const float us = model_->params().uv_scale;
+  const float extent = us * (std::fabs(h.dudx) + std::fabs(h.dvdx) + std::fabs(h.dudy) + std::fabs(h.dvdy));
+  return extent > min_footprint_ ? *model_ : *point_model_;
+}
+
+PassThrough KnitModelMaterial::resolve(SurfaceInteraction& si, const RayDifferential& ray, Sampler& sampler) const {
+  PassThrough pt;
+  const Vec2 shift = sampler.get2d();
+  const knit::BaseHit hit = base_hit(si, ray.diff_scale);
+  const knit::KnitMaterial& model = model_for(hit);
+  const knit::KnitShade sh = model.shade(hit, to_kvec(ray.d), frame_.get(), {shift.x, shift.y});
+  if (sh.pass_through) {
+    pt.pass = true;  // no yarn along this ray: it goes on straight
+    return pt;
+  }
+  if (sh.point.p_delta > 0 && sampler.get1d() < sh.point.p_delta) {
+    pt.pass = true;  // multi-scale: through a gap, with probability p_delta
+    return pt;
+  }
+  // Shaded at the base hit point, in the yarn's frame.
+  const Vec3 n = from_kvec(sh.sn);
+  const float ln = length(n);
+  if (!(ln > 0.5f) || !std::isfinite(ln)) {
+    pt.pass = true;  // never seen; keeps a broken frame from producing NaNs
+    return pt;
+  }
+  si.shading = Frame::from_normal_tangent(n / ln, from_kvec(sh.st));
+  si.yarn.active = true;
+  si.yarn.bsdf = model.kernel_bsdf(sh);
+  return pt;
+}
+
+Rgb KnitModelMaterial::transmittance(const SurfaceInteraction& si, Vec3 w, Sampler& sampler) const {
+  const Vec2 shift = sampler.get2d();
+  const knit::BaseHit hit = base_hit(si);
+  return Rgb(model_for(hit).transmittance(hit, to_kvec(w), frame_.get(), {shift.x, shift.y}));
+}
+
+}  // namespace knit::render

@@ -1,0 +1,93 @@
+// The knit model on a base mesh (paper Sec. 4-6): knit::KnitMaterial
+// (native/include/knit/shading.h) put on one mesh of the scene.
+//
+// The base mesh is the top of the yarn shell (paper Alg. 1): a ray that hits
+// it from the front enters pattern space at (x, y, shell_top) with
+// x = uv_scale u, y = uv_scale v; the yarns hang below the mesh. Pattern
+// units per world unit, S = uv_scale / sqrt(|dP/du| |dP/dv|), are taken per
+// triangle (a warning names meshes whose |dP/du| and |dP/dv| differ by more
+// than 10%: stitches are stretched there).
+//
+// At a hit, resolve() fills knit::BaseHit (UV, the mesh's front-side frame,
+// S, curvature, the UV footprint of the ray differentials) and runs
+// KnitMaterial::shade with a per-sample footprint shift. A ray that meets
+// no yarn passes on straight (a pass-through event); in multi-scale mode it
+// also passes with probability p_delta. Otherwise the hit is shaded at the
+// base hit point with the yarn BSDF in the yarn's frame. Shadow rays are
+// attenuated by KnitMaterial::transmittance (near field 0 or 1, multi-scale
+// p_delta). In multi-scale mode, hits without a ray footprint (shadow rays,
+// rays after a diffuse bounce) use the near-field model: the aggregate over
+// a point is that point's CAPM hit, so one march replaces N identical ones.
+// docs/renderer.md#the-knit-model.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "knit/shading.h"
+#include "render/material_yarn.h"
+#include "render/mesh.h"
+#include "render/mesh_frame.h"
+#include "render/scene_desc.h"
+
+namespace knit::render {
+
+// Per-triangle pattern scale and curvature of a mesh under a knit material.
+struct KnitTriangle {
+  float pattern_per_world = 1;  // S = uv_scale / sqrt(|dP/du| |dP/dv|)
+  float kx = 0, ky = 0;         // normal curvature along +u and +v, 1 / world units
+};
+
+struct KnitMeshTables {
+  std::vector<KnitTriangle> triangles;
+  bool flat = true;           // every vertex normal (nearly) the same
+  size_t with_uv_area = 0;    // triangles with a usable UV map (the others get the mean scale)
+  size_t stretched = 0;       // triangles whose |dP/du| / |dP/dv| is off 1 by more than 10%
+  double stretched_area = 0;  // their share of the UV area
+  float worst_ratio = 1;      // the largest max(ratio, 1 / ratio)
+};
+
+// Computes the tables for `mesh` (world space, with UVs) at `uv_scale`.
+KnitMeshTables knit_mesh_tables(const TriangleMesh& mesh, float uv_scale);
+
+class KnitModelMaterial final : public YarnShadedMaterial {
+ public:
+  // `where` names the object in warnings ("scene.json: objects[2] (name)");
+  // errors name `object_path`. Throws SceneError for a mesh without any UV
+  // area or an unreadable baked-frame file.
+  KnitModelMaterial(const KnitDesc& desc, std::shared_ptr<const TriangleMesh> mesh, const std::string& scene_file,
+                    const std::string& material_path, const std::string& object_path, const std::string& where,
+                    Warnings& warnings);
+  ~KnitModelMaterial() override;
+
+  const char* kind() const override { return "knit"; }
+  PassThrough resolve(SurfaceInteraction& si, const RayDifferential& ray, Sampler& sampler) const override;
+  Rgb transmittance(const SurfaceInteraction& si, Vec3 w, Sampler& sampler) const override;
+
+  const knit::KnitMaterial& model() const { return *model_; }
+  // The BaseHit resolve() passes to the model; the UV footprint is scaled to
+  // `footprint_scale` pixels (KnitDesc) from the ray's differentials, which
+  // are `diff_scale` pixels apart.
+  knit::BaseHit base_hit(const SurfaceInteraction& si, float diff_scale = 1.0f) const;
+  const knit::FrameProvider* frame_provider() const { return frame_.get(); }
+  // Renderer-side tables for this mesh (per-triangle data, the MeshFrame).
+  size_t binding_bytes() const;
+
+ private:
+  // The model for hits without a footprint (shadow rays, rays after a
+  // diffuse bounce): in multi-scale mode a near-field twin of model_ (every
+  // footprint point would be the same CAPM ray: one march instead of N);
+  // otherwise model_ itself.
+  const knit::KnitMaterial& model_for(const knit::BaseHit& hit) const;
+  float min_footprint_ = 0;  // pattern units: smaller footprints count as none
+  float footprint_scale_ = 1;  // pixels
+
+  std::shared_ptr<const knit::KnitMaterial> model_;
+  std::shared_ptr<const knit::KnitMaterial> point_model_;
+  std::shared_ptr<const TriangleMesh> mesh_;
+  KnitMeshTables tables_;
+  std::unique_ptr<MeshFrame> frame_;  // null: flat mesh, or the curvature mode
+};
+
+}  // namespace knit::render

@@ -1,0 +1,210 @@
+#!/usr/bin/python3
+"""Benchmarks of the knit model in the native renderer (docs/results.md).
+
+Runs `knitshade render` with --report and `knitshade compare`; everything is
+measured in one run, on this machine, and written as JSON (and a Markdown
+summary) to OUT_DIR.
+
+  equal quality   the model and explicit yarns (and, in far view, the
+                  multi-scale and near-field model) each render a
+                  high-sample reference of their own, then a ladder of sample
+                  counts; the time each needs to reach the same RMSE against
+                  its own reference is interpolated (log-log) on the ladder.
+  memory          the model's state (KnitMaterial::state_bytes) and the
+                  renderer's per-mesh tables, against the explicit yarns'
+                  geometry, shading data and Embree BVH.
+  overhead        the knit model against a plain diffuse material of the same
+                  colour on the same mesh and lights, same samples.
+
+  /usr/bin/python3 scripts/bench_knit.py BUILD_DIR OUT_DIR [--quick]
+"""
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+
+ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+SCENES = os.path.join(ROOT, "examples", "scenes")
+
+
+def absolutise(scene):
+    """Scene paths relative to examples/scenes, made absolute (the scene is written elsewhere)."""
+    def fix(p):
+        return p if os.path.isabs(p) else os.path.normpath(os.path.join(SCENES, p))
+    for o in scene["objects"]:
+        o["mesh"] = fix(o["mesh"])
+    for light in scene["lights"]:
+        if "file" in light:
+            light["file"] = fix(light["file"])
+    for m in scene["materials"].values():
+        if isinstance(m.get("pattern"), str):
+            m["pattern"] = fix(m["pattern"])
+        if m.get("frames") not in (None, "exact", "curvature"):
+            m["frames"] = fix(m["frames"])
+    return scene
+
+
+def load(name):
+    with open(os.path.join(SCENES, name)) as f:
+        return absolutise(json.load(f))
+
+
+class Bench:
+    def __init__(self, build, out, quick):
+        self.cli = os.path.join(build, "knitshade")
+        self.out = out
+        self.quick = quick
+        os.makedirs(out, exist_ok=True)
+        self.results = {"machine": os.uname().nodename, "cpus": os.cpu_count(), "started": time.ctime()}
+
+    def render(self, tag, scene, spp, seed=1, explicit=False):
+        path = os.path.join(self.out, tag + ".json")
+        with open(path, "w") as f:
+            json.dump(scene, f, indent=1)
+        img = os.path.join(self.out, f"{tag}_{spp}_{seed}.exr")
+        rep = os.path.join(self.out, f"{tag}_{spp}_{seed}.report.json")
+        cmd = [self.cli, "render", path, "-o", img, "--spp", str(spp), "--seed", str(seed), "--quiet",
+               "--report", rep]
+        if explicit:
+            cmd.append("--explicit-yarns")
+        subprocess.run(cmd, check=True)
+        with open(rep) as f:
+            return img, json.load(f)
+
+    def compare(self, a, b):
+        r = subprocess.run([self.cli, "compare", a, b], check=True, capture_output=True, text=True)
+        return json.loads(r.stdout)
+
+    def convergence(self, tag, scene, ladder, ref_spp, explicit=False):
+        """Render time and RMSE against the method's own reference along the ladder (cached by tag)."""
+        if not hasattr(self, "_conv"):
+            self._conv = {}
+        if tag in self._conv:
+            return self._conv[tag]
+        ref, ref_rep = self.render(tag + "_ref", scene, ref_spp, seed=1000, explicit=explicit)
+        points = []
+        for spp in ladder:
+            img, rep = self.render(tag, scene, spp, seed=1, explicit=explicit)
+            c = self.compare(img, ref)
+            points.append({"spp": spp, "seconds": rep["seconds"]["render"], "rmse": c["rmse"], "mean": c["mean_a"]})
+            print(f"  {tag}: {spp:5d} spp  {rep['seconds']['render']:8.3f} s  RMSE {c['rmse']:.5f}", flush=True)
+        # The reference's own noise: RMSE(1 spp) / sqrt(ref_spp), removed in quadrature.
+        e1 = points[0]["rmse"] * math.sqrt(points[0]["spp"])
+        ref_noise = e1 / math.sqrt(ref_spp)
+        for p in points:
+            p["rmse_corrected"] = math.sqrt(max(p["rmse"] ** 2 - ref_noise ** 2, 1e-30))
+        self._conv[tag] = {"reference": ref, "reference_spp": ref_spp,
+                           "reference_seconds": ref_rep["seconds"]["render"], "reference_noise": ref_noise,
+                           "points": points, "report": ref_rep}
+        return self._conv[tag]
+
+    @staticmethod
+    def time_to_error(conv, target):
+        """Render seconds to reach RMSE `target`, interpolated log-log on the ladder."""
+        pts = conv["points"]
+        for a, b in zip(pts, pts[1:]):
+            ea, eb = a["rmse_corrected"], b["rmse_corrected"]
+            if ea >= target >= eb and ea > eb:
+                f = (math.log(ea) - math.log(target)) / (math.log(ea) - math.log(eb))
+                return math.exp(math.log(a["seconds"]) + f * (math.log(b["seconds"]) - math.log(a["seconds"])))
+        # Outside the ladder: extrapolate with error ~ 1 / sqrt(time) from the nearest end.
+        p = pts[0] if target > pts[0]["rmse_corrected"] else pts[-1]
+        return p["seconds"] * (p["rmse_corrected"] / target) ** 2
+
+    def equal_quality(self, name, scene_a, scene_b, label_a, label_b, ladder, ref_spp, explicit_b=False,
+                      tag_a=None, tag_b=None):
+        print(f"equal quality: {name}", flush=True)
+        a = self.convergence(tag_a or f"{name}_{label_a}", scene_a, ladder, ref_spp)
+        b = self.convergence(tag_b or f"{name}_{label_b}", scene_b, ladder, ref_spp, explicit=explicit_b)
+        # Target: the error method A reaches at the middle of the ladder, if B reaches it too.
+        mid = a["points"][len(ladder) // 2]["rmse_corrected"]
+        target = max(mid, b["points"][-1]["rmse_corrected"])
+        ta, tb = self.time_to_error(a, target), self.time_to_error(b, target)
+        mean = a["points"][-1]["mean"]
+        res = {"target_rmse": target, "target_relative": target / mean if mean else None,
+               label_a: {"seconds": ta, "ladder": a["points"], "reference_spp": ref_spp,
+                         "reference_seconds": a["reference_seconds"]},
+               label_b: {"seconds": tb, "ladder": b["points"], "reference_spp": ref_spp,
+                         "reference_seconds": b["reference_seconds"]},
+               "speedup": tb / ta}
+        ma, mb = a["report"]["memory_bytes"], b["report"]["memory_bytes"]
+        res["memory"] = {label_a: ma, label_b: mb}
+        res["knit"] = {label_a: a["report"]["knit"], label_b: b["report"]["knit"]}
+        # The converged images against each other (the model's error, not noise).
+        res["references_compared"] = self.compare(a["reference"], b["reference"])
+        print(f"  -> target RMSE {target:.5f}: {label_a} {ta:.2f} s, {label_b} {tb:.2f} s, "
+              f"{label_b}/{label_a} = {tb / ta:.2f}", flush=True)
+        return res
+
+    def overhead(self, name, scene, spp):
+        print(f"overhead: {name}", flush=True)
+        diffuse = json.loads(json.dumps(scene))
+        for key, m in diffuse["materials"].items():
+            if m["type"] == "knit":
+                c = m["yarn_colors"][0]
+                diffuse["materials"][key] = {"type": "diffuse", "albedo": c}
+        _, rk = self.render(name + "_knit", scene, spp)
+        _, rd = self.render(name + "_diffuse", diffuse, spp)
+        res = {"spp": spp, "knit_seconds": rk["seconds"]["render"], "diffuse_seconds": rd["seconds"]["render"],
+               "ratio": rk["seconds"]["render"] / rd["seconds"]["render"],
+               "knit_rays": rk["rays"]["total"], "diffuse_rays": rd["rays"]["total"], "knit": rk["knit"]}
+        print(f"  -> knit {res['knit_seconds']:.2f} s, diffuse {res['diffuse_seconds']:.2f} s, "
+              f"ratio {res['ratio']:.2f}", flush=True)
+        return res
+
+
+def sized(scene, w, h):
+    s = json.loads(json.dumps(scene))
+    s["film"]["width"], s["film"]["height"] = w, h
+    return s
+
+
+def main():
+    if len(sys.argv) < 3:
+        print(__doc__)
+        sys.exit(2)
+    quick = "--quick" in sys.argv
+    b = Bench(sys.argv[1], sys.argv[2], quick)
+    size = 64 if quick else 128
+    ladder = [1, 2, 4, 8, 16] if quick else [1, 2, 4, 8, 16, 32, 64]
+    ref_spp = 128 if quick else 1024
+
+    # 1. The half cylinder of Figure 7 (200 yarns), far view, front and back light.
+    hc = sized(load("half_cylinder_front.json"), size, size)
+    hc["lights"].append({"type": "directional", "to_light": [-0.25, 0.3, -1], "irradiance": [2.4, 2.35, 2.3]})
+    b.results["half_cylinder"] = b.equal_quality("half_cylinder", hc, hc, "model", "explicit", ladder, ref_spp,
+                                                 explicit_b=True)
+
+    # 2. A garment: the scarf at a real gauge (125 stitches across 25 cm, 1400 rows over 2 m).
+    scarf = sized(load("scarf.json"), size, int(size * 1.2))
+    scarf["materials"]["wool"]["uv_scale"] = 3142
+    b.results["garment_scarf"] = b.equal_quality("garment", scarf, scarf, "model", "explicit", ladder, ref_spp,
+                                                 explicit_b=True)
+
+    # 3. Far view: multi-scale against near field (the flat swatch far away).
+    far = sized(load("swatch_far.json"), size, int(size * 0.75))
+    near = json.loads(json.dumps(far))
+    near["materials"]["wool"]["mode"] = "near_field"
+    b.results["far_view"] = b.equal_quality("far_view", far, near, "multi_scale", "near_field", ladder, ref_spp,
+                                            tag_b="far_near_field")
+    far4 = json.loads(json.dumps(far))
+    far4["materials"]["wool"]["footprint_points"] = 4
+    b.results["far_view_4_points"] = b.equal_quality("far_view4", far4, near, "multi_scale", "near_field", ladder,
+                                                     ref_spp, tag_b="far_near_field")
+
+    # 4. Overhead of the knit material against diffuse, same mesh, lights and samples.
+    b.results["overhead"] = {
+        "half_cylinder": b.overhead("oh_half_cylinder", hc, 16),
+        "swatch_closeup": b.overhead("oh_swatch", sized(load("swatch_closeup.json"), size, size), 16),
+        "scarf": b.overhead("oh_scarf", sized(load("scarf.json"), size, int(size * 1.2)), 16),
+    }
+    b.results["finished"] = time.ctime()
+    with open(os.path.join(b.out, "bench_knit.json"), "w") as f:
+        json.dump(b.results, f, indent=2)
+    print("wrote", os.path.join(b.out, "bench_knit.json"))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,439 @@
+// The knit model in the renderer (material_knit.h) and its explicit-yarn
+// ground truth (yarn_tubes.h, curve_shape.h, material_explicit_yarn.h):
+// mesh tables, tube geometry, white furnaces, agreement of the sampling
+// strategies through knit pass-through events, determinism, and the model
+// against explicit yarns on the example scenes (docs/results.md).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <functional>
+
+#include "knit/yarns.h"
+#include "render/curve_shape.h"
+#include "render/frame_bake.h"
+#include "render/image_compare.h"
+#include "render/material_knit.h"
+#include "render/mesh_frame.h"
+#include "render/yarn_tubes.h"
+#include "render_test_util.h"
+
+namespace knit::render {
+namespace {
+
+using test::mesh;
+
+std::shared_ptr<const knit::KnitMaterial> knit_model(const std::string& pattern_rows, float uv_scale,
+                                                      knit::KnitMode mode = knit::KnitMode::NearField) {
+  knit::KnitMaterialParams p;
+  p.uv_scale = uv_scale;
+  p.mode = mode;
+  std::vector<std::vector<int>> rows;
+  for (char c : pattern_rows) {
+    if (c == '/') {
+      rows.emplace_back();
+      continue;
+    }
+    if (rows.empty()) rows.emplace_back();
+    rows.back().push_back(c == 'K' ? 0 : 1);
+  }
+  return std::make_shared<const knit::KnitMaterial>(knit::Pattern::from_rows(rows), p);
+}
+
+// ---------------------------------------------------------------------------
+// Mesh tables, MeshFrame curvature, tubes
+
+TEST(KnitMesh, HalfCylinderScaleAndCurvature) {
+  // u is the arc length (radius 1), v the height: |dP/du| = |dP/dv| = 1.
+  const TriangleMesh m = load_mesh(mesh("half_cylinder.obj"));
+  const KnitMeshTables t = knit_mesh_tables(m, 450.0f);
+  EXPECT_FALSE(t.flat);
+  EXPECT_EQ(t.stretched, 0u);
+  double kx = 0, ky = 0;
+  for (const KnitTriangle& tri : t.triangles) {
+    EXPECT_NEAR(tri.pattern_per_world, 450.0f, 450.0f * 2e-3f);
+    kx += tri.kx;
+    ky += tri.ky;
+  }
+  kx /= double(t.triangles.size());
+  ky /= double(t.triangles.size());
+  EXPECT_NEAR(kx, 1.0, 2e-3);  // convex, 1 / radius
+  EXPECT_NEAR(ky, 0.0, 1e-4);
+  const MeshFrame frame(std::make_shared<const TriangleMesh>(m), 450.0f);
+  const knit::Vec3 k = frame.curvature(450.0f * 1.3f, 450.0f * 0.7f);
+  EXPECT_NEAR(k.x, 1.0f / 450.0f, 2e-6f);  // per pattern unit
+  EXPECT_NEAR(k.y, 0.0f, 1e-7f);
+}
+
+TEST(KnitMesh, FlatQuadAndAStretchedMesh) {
+  const TriangleMesh quad = load_mesh(mesh("quad.obj"));
+  const KnitMeshTables t = knit_mesh_tables(quad, 40.0f);
+  EXPECT_TRUE(t.flat);
+  EXPECT_NEAR(t.triangles[0].pattern_per_world, 40.0f, 1e-3f);
+  // Stretch the quad by 2 along x: S is the geometric mean, and the stretch is reported.
+  TriangleMesh wide = quad;
+  for (Vec3& p : wide.positions) p.x *= 2;
+  const KnitMeshTables w = knit_mesh_tables(wide, 40.0f);
+  EXPECT_EQ(w.stretched, 2u);
+  EXPECT_NEAR(w.stretched_area, 1.0, 1e-6);
+  EXPECT_NEAR(w.worst_ratio, 2.0f, 1e-4f);
+  EXPECT_NEAR(w.triangles[1].pattern_per_world, 40.0f / std::sqrt(2.0f), 1e-3f);
+}
+
+TEST(KnitMesh, StretchedMeshWarnsOnce) {
+  const std::string dir = test::test_dir();
+  test::write_file(dir, "wide.obj",
+                   "v -1 -0.5 0\nv 1 -0.5 0\nv 1 0.5 0\nv -1 0.5 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                   "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n");
+  const auto r = test::render_text(dir, R"({
+    "film": {"width": 8, "height": 8, "spp": 1},
+    "camera": {"position": [0, 0, 3], "look_at": [0, 0, 0]},
+    "lights": [{"type": "environment", "color": [1, 1, 1]}],
+    "materials": {"wool": {"type": "knit", "pattern": ["K"], "uv_scale": 30, "yarn_colors": [[0.5, 0.5, 0.5]]}},
+    "objects": [{"name": "w", "mesh": "wide.obj", "material": "wool"}]})");
+  int n = 0;
+  for (const std::string& m : r.warnings.messages)
+    if (m.find("differing by more than 10%") != std::string::npos) {
+      ++n;
+      EXPECT_NE(m.find("objects[0] (w)"), std::string::npos) << m;
+      EXPECT_NE(m.find("2 of 2 triangles (100.0% of the UV area)"), std::string::npos) << m;
+      EXPECT_NE(m.find("materials.wool"), std::string::npos) << m;
+    }
+  EXPECT_EQ(n, 1);
+}
+
+TEST(YarnTubes, FlatQuadPlacesTheExactCurvesBelowTheMesh) {
+  // quad.obj: 1 x 1 in the xy plane facing +z, UV = position + 0.5.
+  const TriangleMesh quad = load_mesh(mesh("quad.obj"));
+  const auto model = knit_model("KP/PK", 40.0f);
+  const YarnTubes y = build_yarn_tubes(quad, *model, 16);
+  ASSERT_GT(y.segments.size(), 100u);
+  const float S = 40.0f, top = model->surface().shell_top(), r = model->params().stitch.r;
+  // Every point lies over the quad and at most 2 shell_top / S below it.
+  for (size_t i = 0; i < y.num_points(); ++i) {
+    const Vec3 p = y.point(i);
+    EXPECT_LE(std::fabs(p.x), 0.5f + 1e-5f);
+    EXPECT_LE(std::fabs(p.y), 0.5f + 1e-5f);
+    EXPECT_LE(p.z, 1e-6f);
+    EXPECT_GE(p.z, -2 * top / S - 1e-6f);
+    EXPECT_NEAR(y.radius(i), r / S, 1e-7f);
+  }
+  // Point 37 (of 16 per stitch) of the exact curve of row 3, mapped: x / S - 0.5, y / S - 0.5, (z - top) / S.
+  const knit::CurvePoint c =
+      knit::yarn_curve_exact(model->surface().pattern(), model->params().stitch, 3, 6.283185307179586 * 37 / 16);
+  const Vec3 want(float(c.p[0] / S - 0.5), float(c.p[1] / S - 0.5), float((c.p[2] - top) / S));
+  float best = 1e9f;
+  for (size_t i = 0; i < y.num_points(); ++i) best = std::min(best, length(y.point(i) - want));
+  EXPECT_LT(best, 1e-5f);
+  // Polylines are split where they leave the UV square: segments never jump.
+  for (size_t j = 0; j < y.segments.size(); ++j) {
+    const uint32_t k = y.segments[j];
+    EXPECT_LT(length(y.point(k + 1) - y.point(k)), 2.0f / S);
+  }
+  EXPECT_GT(y.curves, size_t(40 / model->surface().cell_height()));
+  EXPECT_EQ(y.geometry_bytes(), y.num_points() * 16 + y.segments.size() * 5);
+}
+
+TEST(YarnTubes, TooManyPointsIsAClearError) {
+  const TriangleMesh quad = load_mesh(mesh("quad.obj"));
+  const auto model = knit_model("K", 4000.0f);
+  try {
+    build_yarn_tubes(quad, *model, 32, 1'000'000);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("curve points"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("quad.obj"), std::string::npos) << e.what();
+  }
+}
+
+TEST(CurveShape, HitsFromInsideAndOutsideAreToldApart) {
+  Accel accel;
+  auto tubes = std::make_shared<YarnTubes>();
+  // One straight tube along x, radius 0.1, five points.
+  for (int i = 0; i < 5; ++i) {
+    tubes->vertices.insert(tubes->vertices.end(), {float(i) * 0.25f - 0.5f, 0, 0, 0.1f});
+    tubes->color.push_back(0);
+    tubes->arc.push_back(float(i));
+    tubes->fabric_normal.push_back({0, 0, 1});
+  }
+  for (uint32_t k = 0; k < 4; ++k) tubes->segments.push_back(k);
+  tubes->flags = {RTC_CURVE_FLAG_NEIGHBOR_RIGHT, RTC_CURVE_FLAG_NEIGHBOR_LEFT | RTC_CURVE_FLAG_NEIGHBOR_RIGHT,
+                  RTC_CURVE_FLAG_NEIGHBOR_LEFT | RTC_CURVE_FLAG_NEIGHBOR_RIGHT, RTC_CURVE_FLAG_NEIGHBOR_LEFT};
+  accel.add(std::make_unique<CurveShape>(tubes), 0, -1);
+  accel.commit();
+  // From outside toward the axis: the front of the tube, normal against the ray.
+  RayDifferential out;
+  out.o = {0.05f, 0, 1};
+  out.d = {0, 0, -1};
+  SurfaceInteraction si;
+  ASSERT_TRUE(accel.intersect(out, si));
+  EXPECT_NEAR(si.t, 0.9f, 1e-4f);
+  EXPECT_LT(dot(out.d, si.ng), -0.99f);
+  EXPECT_NEAR(std::fabs(si.shading.t.x), 1.0f, 1e-4f);
+  // From the axis outward (a transmitted ray): the exit, seen from inside.
+  RayDifferential in;
+  in.o = {0.1f, 0, 0};
+  in.d = normalize(Vec3(0, 1, 1));
+  ASSERT_TRUE(accel.intersect(in, si));
+  EXPECT_NEAR(si.t, 0.1f, 1e-4f);
+  EXPECT_GT(dot(in.d, si.ng), 0.99f);
+  // Across the joint between two segments, from inside: no inner surface is met.
+  RayDifferential along;
+  along.o = {-0.3f, 0, 0};
+  along.d = normalize(Vec3(1, 0.2f, 0));  // leaves the tube at x = 0.2, past the joints at -0.25 and 0
+  ASSERT_TRUE(accel.intersect(along, si));
+  EXPECT_GT(dot(along.d, si.ng), 0.0f);
+  EXPECT_NEAR(si.p.y, 0.1f, 2e-3f);
+  EXPECT_NEAR(si.p.x, 0.2f, 1e-2f);
+}
+
+// ---------------------------------------------------------------------------
+// Energy and sampling
+
+std::string furnace_scene(const std::string& mode, bool explicit_yarns) {
+  return R"({
+    "film": {"width": 24, "height": 24, "spp": 48, "seed": 5},
+    "camera": {"position": [0, 0.3, 1.25], "look_at": [0, 0, 0.3], "fov": 30},
+    "integrator": {"max_depth": 256, "rr_depth": 64, "explicit_yarns": )" +
+         std::string(explicit_yarns ? "true" : "false") + R"(},
+    "lights": [{"type": "environment", "color": [1, 1, 1]}],
+    "materials": {"wool": {"type": "knit", "pattern": ["KKPP", "PPKK"], "uv_scale": 40, "yarn_colors": [[1, 1, 1]],
+                           "bsdf": {"eta": 1, "body_energy": 1, "body_reflect": 0, "optical_depth": 0},
+                           "ply": {"enabled": false}, "mode": ")" + mode + R"("}},
+    "objects": [{"mesh": ")" + mesh("half_cylinder.obj") + R"(", "material": "wool", "transform": {"scale": 0.5}}]
+  })";
+}
+
+// All colours 1, B = 1, eta = 1, r = 0, no attenuation and no ply shadow: the
+// yarn BSDF is a lossless diffuse transmitter, so a uniform white sky seen
+// through and around the fabric (curved, so rays also meet it from behind)
+// stays exactly white: pass-through events, transmission and the tubes'
+// null events must conserve energy.
+void expect_white_furnace(const RgbImage& img, const char* what) {
+  const double mean = test::mean_channel_value(img);
+  double worst_block = 0;
+  for (int by = 0; by < img.height; by += 8)
+    for (int bx = 0; bx < img.width; bx += 8) {
+      double s = 0;
+      for (int y = by; y < by + 8; ++y)
+        for (int x = bx; x < bx + 8; ++x) s += img.at(x, y).mean();
+      worst_block = std::max(worst_block, std::fabs(s / 64 - 1));
+    }
+  std::printf("[furnace] %s: mean %.5f (error %.3f%%), worst 8x8 block %.3f%%\n", what, mean, 100 * (mean - 1),
+              100 * worst_block);
+  EXPECT_NEAR(mean, 1.0, 0.01) << what;
+  EXPECT_LT(worst_block, 0.03) << what;
+}
+
+TEST(KnitFurnace, NearField) {
+  const auto r = test::render_text(test::test_dir(), furnace_scene("near_field", false));
+  EXPECT_EQ(r.result.stats.invalid_samples, 0u);
+  EXPECT_GT(r.result.stats.resolves, 24u * 24u * 48u / 2);
+  EXPECT_GT(r.result.stats.resolve_passes, 0u);
+  expect_white_furnace(r.image, "near field");
+}
+
+TEST(KnitFurnace, MultiScale) {
+  const auto r = test::render_text(test::test_dir(), furnace_scene("multi_scale", false));
+  EXPECT_EQ(r.result.stats.invalid_samples, 0u);
+  expect_white_furnace(r.image, "multi-scale");
+}
+
+TEST(KnitFurnace, ExplicitYarns) {
+  const auto r = test::render_text(test::test_dir(), furnace_scene("near_field", true));
+  EXPECT_EQ(r.result.stats.invalid_samples, 0u);
+  EXPECT_EQ(r.result.stats.pass_limit, 0u);
+  expect_white_furnace(r.image, "explicit yarns");
+}
+
+// A knit swatch between a floor and an area light: light reaches the floor
+// through the gaps (shadow rays use transmittance(), BSDF-sampled rays pass
+// through), and the camera sees the floor through the swatch too. NEE only,
+// BSDF sampling only and MIS must agree.
+std::string strategies_scene(const std::string& strategy, const std::string& mode) {
+  return R"({
+    "film": {"width": 16, "height": 16, "spp": 256, "seed": 11},
+    "camera": {"position": [0, 1.6, 0.9], "look_at": [0, 0, 0], "fov": 30},
+    "integrator": {"max_depth": 4, "rr_depth": 4, "strategy": ")" + strategy + R"("},
+    "lights": [{"type": "quad", "corner": [-0.6, 1.4, -0.6], "edge_u": [1.2, 0, 0], "edge_v": [0, 0, 1.2], "emission": [3, 3, 3],
+                "two_sided": true}],
+    "materials": {"floor": {"type": "diffuse", "albedo": [0.7, 0.7, 0.7]},
+                  "wool": {"type": "knit", "pattern": ["KKPP", "PPKK"], "uv_scale": 30, "r": 0.5,
+                           "yarn_colors": [[0.8, 0.5, 0.3]], "mode": ")" + mode + R"(", "footprint_points": 4}},
+    "objects": [{"mesh": ")" + mesh("quad.obj") + R"(", "material": "floor", "transform": {"rotate": [-90, 0, 0], "scale": 3}},
+                {"mesh": ")" + mesh("quad.obj") + R"(", "material": "wool",
+                 "transform": {"translate": [0, 0.5, 0], "rotate": [-90, 0, 0], "scale": 1.2}}]
+  })";
+}
+
+void expect_strategies_agree(const std::string& mode) {
+  const std::string dir = test::test_dir();
+  double mean[3], err[3];
+  const char* names[3] = {"mis", "nee", "bsdf"};
+  for (int s = 0; s < 3; ++s) {
+    const auto r = test::render_text(dir, strategies_scene(names[s], mode));
+    EXPECT_EQ(r.result.stats.invalid_samples, 0u);
+    // Standard error of the image mean from the spread of 4x4-pixel block means.
+    const RgbImage b = block_average(r.image, 4);
+    double m = 0, m2 = 0;
+    for (const Rgb& p : b.pixels) {
+      m += p.mean();
+      m2 += double(p.mean()) * p.mean();
+    }
+    const double n = double(b.pixels.size());
+    m /= n;
+    mean[s] = m;
+    err[s] = std::sqrt(std::max(m2 / n - m * m, 0.0) / n);
+    if (s == 0) EXPECT_GT(r.result.stats.shadow_resolves, 0u);
+  }
+  for (int s = 1; s < 3; ++s) {
+    const double z = (mean[s] - mean[0]) / std::sqrt(err[0] * err[0] + err[s] * err[s]);
+    std::printf("[strategies] %s: mis %.5f, %s %.5f (z = %.2f)\n", mode.c_str(), mean[0], names[s], mean[s], z);
+    EXPECT_LT(std::fabs(z), 4.0) << names[s];
+    EXPECT_NEAR(mean[s] / mean[0], 1.0, 0.03) << names[s];
+  }
+}
+
+TEST(KnitStrategies, NearFieldAgree) { expect_strategies_agree("near_field"); }
+TEST(KnitStrategies, MultiScaleAgree) { expect_strategies_agree("multi_scale"); }
+
+TEST(KnitDeterminism, SameSeedSameImageWithOneAndTwoThreads) {
+  const std::string dir = test::test_dir();
+  for (const char* mode : {"near_field", "multi_scale"}) {
+    std::string s = strategies_scene("mis", mode);
+    s.replace(s.find("\"spp\": 256"), 10, "\"spp\": 4");
+    const auto one = test::render_text(dir, s, 1);
+    const auto two = test::render_text(dir, s, 2);
+    ASSERT_EQ(one.image.pixels.size(), two.image.pixels.size());
+    EXPECT_EQ(std::memcmp(one.image.pixels.data(), two.image.pixels.data(), one.image.pixels.size() * sizeof(Rgb)), 0)
+        << mode;
+  }
+}
+
+TEST(KnitFrames, BakedFramesRenderLikeExactOnes) {
+  const std::string dir = test::test_dir();
+  const TriangleMesh m = load_mesh(mesh("half_cylinder.obj"));
+  BakeSettings bs;
+  bs.width = 512;
+  bs.height = 256;
+  bake_frames(m, dir + "/frames.exr", bs);
+  auto scene = [&](const std::string& frames) {
+    return R"({
+      "film": {"width": 32, "height": 32, "spp": 32, "seed": 2},
+      "camera": {"position": [0.9, 0, 1.6], "look_at": [0.5, 0, 0.6], "fov": 25},
+      "lights": [{"type": "environment", "color": [0.2, 0.2, 0.2]}, {"type": "directional", "to_light": [1, 0.5, 1], "irradiance": [3, 3, 3]}],
+      "materials": {"wool": {"type": "knit", "pattern": ["KP"], "uv_scale": 60, "yarn_colors": [[0.8, 0.6, 0.4]],
+                             "frames": ")" + frames + R"("}},
+      "objects": [{"mesh": ")" + mesh("half_cylinder.obj") + R"(", "material": "wool"}]})";
+  };
+  const auto exact = test::render_text(dir, scene("exact"));
+  const auto baked = test::render_text(dir, scene("frames.exr"));
+  const auto curv = test::render_text(dir, scene("curvature"));
+  const ImageStats b = compare_images(baked.image, exact.image, 4);
+  const ImageStats c = compare_images(curv.image, exact.image, 4);
+  std::printf("[frames] baked vs exact: rel. bias %+.4f, rel. RMSE (4x4 blocks) %.4f; curvature vs exact: %+.4f, %.4f\n",
+              b.rel_bias, b.rel_rmse, c.rel_bias, c.rel_rmse);
+  EXPECT_LT(std::fabs(b.rel_bias), 0.02);
+  EXPECT_LT(b.rel_rmse, 0.1);
+  EXPECT_LT(std::fabs(c.rel_bias), 0.02);
+  EXPECT_LT(c.rel_rmse, 0.1);
+}
+
+// ---------------------------------------------------------------------------
+// The model against explicit yarns (docs/results.md#model-versus-explicit-yarns)
+
+struct Comparison {
+  ImageStats pixels, blocks;  // model vs explicit: per pixel and over 4x4 blocks
+  double noise_rmse = 0;      // estimated RMSE of (model - explicit) due to noise alone
+  double seconds_model = 0, seconds_explicit = 0;
+};
+
+// Renders examples/scenes/<scene> at size x size with the model and as
+// explicit yarns, each as two half-sample renders with different seeds (their
+// difference estimates the noise; their mean is the full-sample image).
+Comparison compare_model_and_explicit(const std::string& scene, int size, int spp,
+                                      const std::function<void(SceneDesc&)>& edit = {}) {
+  Comparison c;
+  RgbImage img[2];
+  double noise2 = 0;
+  for (int e = 0; e < 2; ++e) {
+    RgbImage half[2];
+    for (int h = 0; h < 2; ++h) {
+      SceneDesc d = load_scene_file(test::source_dir() + "/examples/scenes/" + scene);
+      d.film.width = d.film.height = size;
+      d.film.spp = spp / 2;
+      d.film.seed = 100 + h;
+      if (edit) edit(d);
+      BuildOptions o;
+      o.explicit_yarns = e == 1;
+      Warnings w;
+      const Scene sc(d, o, w);
+      RenderSettings s;
+      s.spp = d.film.spp;
+      s.seed = d.film.seed;
+      const RenderResult r = render_image(sc, s);
+      EXPECT_EQ(r.stats.invalid_samples, 0u);
+      (e ? c.seconds_explicit : c.seconds_model) += r.seconds;
+      half[h] = r.image;
+    }
+    // rmse(a - b) of two independent half renders is sqrt(2) x the noise of
+    // one half, and 2 x the noise of their mean.
+    const double n = compare_images(half[0], half[1]).rmse / 2;
+    noise2 += n * n;
+    img[e] = RgbImage(size, size);
+    for (size_t i = 0; i < img[e].pixels.size(); ++i) img[e].pixels[i] = (half[0].pixels[i] + half[1].pixels[i]) * 0.5f;
+  }
+  c.noise_rmse = std::sqrt(noise2);
+  c.pixels = compare_images(img[0], img[1]);
+  c.blocks = compare_images(img[0], img[1], 4);
+  const std::string out = test::test_dir();
+  write_float_image(out + "/model.exr", img[0]);
+  write_float_image(out + "/explicit.exr", img[1]);
+  std::printf("[model-vs-explicit] %s %dx%d %d spp: RMSE %.4f (rel %.3f), MAE %.4f (rel %.3f), bias %+.4f (rel %+.3f); "
+              "4x4 blocks: RMSE %.4f (rel %.3f); noise RMSE %.4f; mean %.4f; %.1f s model, %.1f s explicit\n",
+              scene.c_str(), size, size, spp, c.pixels.rmse, c.pixels.rel_rmse, c.pixels.mae, c.pixels.rel_mae,
+              c.pixels.bias, c.pixels.rel_bias, c.blocks.rmse, c.blocks.rel_rmse, c.noise_rmse, c.pixels.mean_b,
+              c.seconds_model, c.seconds_explicit);
+  return c;
+}
+
+// Both lights of the close-up (front and back) for the far views too.
+void front_and_back_light(SceneDesc& d) {
+  LightDesc back = d.lights.back();
+  back.to_light = normalize(Vec3(-0.25f, 0.3f, -1.0f));
+  back.irradiance = Rgb(2.4f, 2.35f, 2.3f);
+  back.path = "lights[2]";
+  d.lights.push_back(back);
+}
+
+TEST(KnitVsExplicit, HalfCylinderFarView) {
+  const Comparison c = compare_model_and_explicit("half_cylinder_front.json", 48, 256, front_and_back_light);
+  EXPECT_LT(std::fabs(c.pixels.rel_bias), 0.2);
+  EXPECT_LT(c.pixels.rel_mae, 0.3);
+  EXPECT_LT(c.blocks.rel_rmse, 0.3);
+}
+
+TEST(KnitVsExplicit, HalfCylinderCloseUp) {
+  const Comparison c = compare_model_and_explicit("half_cylinder_closeup.json", 48, 256);
+  EXPECT_LT(std::fabs(c.pixels.rel_bias), 0.2);
+  EXPECT_LT(c.pixels.rel_mae, 0.4);
+  EXPECT_LT(c.blocks.rel_rmse, 0.4);
+}
+
+TEST(KnitVsExplicit, SwatchFarViewMultiScale) {
+  const Comparison c = compare_model_and_explicit("swatch_far.json", 48, 64);
+  EXPECT_LT(std::fabs(c.pixels.rel_bias), 0.2);
+  EXPECT_LT(c.pixels.rel_mae, 0.3);
+  EXPECT_LT(c.blocks.rel_rmse, 0.3);
+}
+
+TEST(KnitVsExplicit, SwatchCloseUp) {
+  const Comparison c = compare_model_and_explicit("swatch_closeup.json", 48, 256);
+  EXPECT_LT(std::fabs(c.pixels.rel_bias), 0.35);
+  EXPECT_LT(c.pixels.rel_mae, 0.5);
+  EXPECT_LT(c.blocks.rel_rmse, 0.5);
+}
+
+}  // namespace
+}  // namespace knit::render
