@@ -80,6 +80,71 @@ KNIT_FN kvec3 knit_sobol2(int i) {
 
 KNIT_FN float knit_frac(float x) { return x - k_floor(x); }
 
+/* Where the footprint's points go (see the file header). */
+KNIT_STRUCT(KFootprint)
+  float x, y;          /* centre, pattern space */
+  kvec3 fx, fy;        /* spanning vectors (KZ unused) */
+  float shift_x, shift_y;
+  int stratified;      /* 1: cell-stratified placement */
+  int ncx, ncy;        /* cells covered (stratified) */
+  int bx0, by0;        /* first covered cell */
+  int n;               /* points */
+KNIT_STRUCT_END(KFootprint)
+
+KNIT_FN KFootprint knit_footprint(KnitGeom g, float x, float y, kvec3 fx, kvec3 fy, int n_points,
+                                  float shift_x, float shift_y) {
+  KFootprint f;
+  float cw = K_2PI, ch = g.row_spacing;
+  float ex = (k_fabs(KX(fx)) + k_fabs(KX(fy))) / cw; /* footprint box, in cells */
+  float ey = (k_fabs(KY(fx)) + k_fabs(KY(fy))) / ch;
+  f.x = x;
+  f.y = y;
+  f.fx = fx;
+  f.fy = fy;
+  f.shift_x = shift_x;
+  f.shift_y = shift_y;
+  f.stratified = (ex >= KF(1.0) && ey >= KF(1.0)) ? 1 : 0;
+  f.ncx = KINT(k_floor(ex));
+  f.ncy = KINT(k_floor(ey));
+  f.bx0 = KINT(k_floor((x - KF(0.5) * ex * cw) / cw + KF(0.5) * (ex - KFLT(f.ncx))));
+  f.by0 = KINT(k_floor((y - KF(0.5) * ey * ch) / ch + KF(0.5) * (ey - KFLT(f.ncy))));
+  f.n = k_maxi(1, k_mini(n_points, KNIT_MS_MAX_POINTS));
+  if (f.stratified != 0) {
+    float cells = KFLT(f.ncx) * KFLT(f.ncy);
+    f.n = k_mini(KNIT_MS_MAX_POINTS, f.n * k_maxi(1, KINT(k_ceil(cells / KF(16.0)))));
+  }
+  return f;
+}
+
+/* Point i of the footprint (KZ unused). */
+KNIT_FN kvec3 knit_footprint_point(KnitGeom g, KFootprint f, int i) {
+  kvec3 q = knit_sobol2(i);
+  float ox = knit_frac(KX(q) + f.shift_x);
+  float oy = knit_frac(KY(q) + f.shift_y);
+  if (f.stratified != 0) {
+    /* golden-ratio recurrences pick the cell; the net places the point in it */
+    int cx = KINT(k_floor(KFLT(f.ncx) * knit_frac(KF(0.61803398875) * KFLT(i) + f.shift_y)));
+    int cy = KINT(k_floor(KFLT(f.ncy) * knit_frac(KF(0.75487766625) * KFLT(i) + f.shift_x)));
+    return kv3((KFLT(f.bx0 + cx) + ox) * K_2PI, (KFLT(f.by0 + cy) + oy) * g.row_spacing, KF(0.0));
+  }
+  return kv3(f.x + (ox - KF(0.5)) * KX(f.fx) + (oy - KF(0.5)) * KX(f.fy),
+             f.y + (ox - KF(0.5)) * KY(f.fx) + (oy - KF(0.5)) * KY(f.fy), KF(0.0));
+}
+
+/* Only p_delta of knit_aggregate (same points, same marches): what a shadow
+ * ray crossing a multi-scale fabric needs. */
+KNIT_FN float knit_footprint_p_delta(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+                                     KFootprint f, kvec3 wi_local, float kx, float ky, float max_segment,
+                                     int max_steps) {
+  int i, hits = 0;
+  for (i = 0; i < f.n; i++) {
+    kvec3 pt = knit_footprint_point(g, f, i);
+    KnitCapm st = knit_capm_curved(g, codes, colors, KX(pt), KY(pt), wi_local, kx, ky, max_segment, max_steps);
+    if (st.state == KNIT_CAPM_HIT) hits = hits + 1;
+  }
+  return KFLT(f.n - hits) / KFLT(f.n);
+}
+
 /* Aggregates n_points CAPM marches over the footprint centred at (x, y).
  * fx = (dx/dpx, dy/dpx), fy = (dx/dpy, dy/dpy) in pattern units (KZ unused);
  * shift_x/y in [0,1): per-shading-point Cranley-Patterson shift. The base is
@@ -92,14 +157,8 @@ KNIT_FN KnitAggregate knit_aggregate(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_AR
                                      int n_points, float shift_x, float shift_y, float kx, float ky,
                                      float max_segment, int max_steps) {
   KnitAggregate a;
-  float cw = K_2PI, ch = g.row_spacing;
-  float ex = (k_fabs(KX(fx)) + k_fabs(KX(fy))) / cw; /* footprint box, in cells */
-  float ey = (k_fabs(KY(fx)) + k_fabs(KY(fy))) / ch;
-  int stratified = (ex >= KF(1.0) && ey >= KF(1.0)) ? 1 : 0;
-  int ncx = KINT(k_floor(ex)), ncy = KINT(k_floor(ey));
-  int bx0 = KINT(k_floor((x - KF(0.5) * ex * cw) / cw + KF(0.5) * (ex - KFLT(ncx))));
-  int by0 = KINT(k_floor((y - KF(0.5) * ey * ch) / ch + KF(0.5) * (ey - KFLT(ncy))));
-  int n = k_maxi(1, k_mini(n_points, KNIT_MS_MAX_POINTS));
+  KFootprint f = knit_footprint(g, x, y, fx, fy, n_points, shift_x, shift_y);
+  int n = f.n;
   int i, c;
   float sx = KF(0.0), sy = KF(0.0), sxx = KF(0.0), sxy = KF(0.0), syy = KF(0.0);
   kvec3 nsum = kv3(KF(0.0), KF(0.0), KF(0.0));
@@ -108,10 +167,6 @@ KNIT_FN KnitAggregate knit_aggregate(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_AR
   float lsum = KF(0.0), ssum = KF(0.0);
   float side = KZ(wi_local) < KF(0.0) ? KF(-1.0) : KF(1.0);
   int pick = -1;
-  if (stratified != 0) {
-    float cells = KFLT(ncx) * KFLT(ncy);
-    n = k_mini(KNIT_MS_MAX_POINTS, n * k_maxi(1, KINT(k_ceil(cells / KF(16.0)))));
-  }
   a.points = n;
   a.hits = 0;
   {
@@ -122,22 +177,9 @@ KNIT_FN KnitAggregate knit_aggregate(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_AR
   a.color_pick = -1;
   for (c = 0; c < KNIT_MS_COLORS; c++) a.color_w[c] = KF(0.0);
   for (i = 0; i < n; i++) {
-    kvec3 q = knit_sobol2(i);
-    float ox = knit_frac(KX(q) + shift_x);
-    float oy = knit_frac(KY(q) + shift_y);
-    float px, py;
+    kvec3 pt = knit_footprint_point(g, f, i);
     KnitCapm st;
-    if (stratified != 0) {
-      /* golden-ratio recurrences pick the cell; the net places the point in it */
-      int cx = KINT(k_floor(KFLT(ncx) * knit_frac(KF(0.61803398875) * KFLT(i) + shift_y)));
-      int cy = KINT(k_floor(KFLT(ncy) * knit_frac(KF(0.75487766625) * KFLT(i) + shift_x)));
-      px = (KFLT(bx0 + cx) + ox) * cw;
-      py = (KFLT(by0 + cy) + oy) * ch;
-    } else {
-      px = x + (ox - KF(0.5)) * KX(fx) + (oy - KF(0.5)) * KX(fy);
-      py = y + (ox - KF(0.5)) * KY(fx) + (oy - KF(0.5)) * KY(fy);
-    }
-    st = knit_capm_curved(g, codes, colors, px, py, wi_local, kx, ky, max_segment, max_steps);
+    st = knit_capm_curved(g, codes, colors, KX(pt), KY(pt), wi_local, kx, ky, max_segment, max_steps);
     ssum = ssum + KFLT(st.steps);
     if (st.state == KNIT_CAPM_HIT) {
       kvec3 nn = st.hit.n;
@@ -157,10 +199,7 @@ KNIT_FN KnitAggregate knit_aggregate(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_AR
       sxx = sxx + bx * bx;
       sxy = sxy + bx * by;
       syy = syy + by * by;
-      {
-        KnitLineHit below = knit_vertical_query(g, codes, colors, KX(st.hit.p), KY(st.hit.p));
-        lsum = lsum + KFLT(below.crossings);
-      }
+      lsum = lsum + KFLT(knit_vertical_layers(g, codes, colors, KX(st.hit.p), KY(st.hit.p)));
       a.color_w[ci] = a.color_w[ci] + KF(1.0);
     }
   }

@@ -222,12 +222,19 @@ KNIT_FN KnitLineHit knit_crossing(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY
   return h;
 }
 
+/* What a line query computes (its `mode`). */
+#define KNIT_QUERY_ENTRY 0  /* first entry and crossing count (s_out not computed) */
+#define KNIT_QUERY_EXIT 1   /* also the exit of the first crossing */
+#define KNIT_QUERY_COUNT 2  /* crossing count only: no entry points (hit stays 0) */
+
 /* First tube entry along o + s D with s in [s_min, s_max] (D unit), and the
- * number of tube crossings overlapping that range. need_exit = 0 skips the
- * exit search (s_out is then K_BIG and crossings counts entries up to s_max
- * whose tube may reach s_min). */
+ * number of tube crossings overlapping that range; see KNIT_QUERY_* for
+ * `mode`. Without exits (ENTRY) s_out is K_BIG and crossings counts entries
+ * up to s_max whose tube may reach s_min; COUNT counts the tubes the line
+ * passes within r of, from the closest points alone (what the layer count
+ * under a point needs, at a fraction of the cost). */
 KNIT_FN KnitLineHit knit_line_query(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
-                                    kvec3 o, kvec3 D, float s_min, float s_max, int need_exit) {
+                                    kvec3 o, kvec3 D, float s_min, float s_max, int mode) {
   KnitLineHit best = knit_line_hit_none();
   kvec3 pa = kv3_madd(o, D, s_min), pb = kv3_madd(o, D, s_max);
   float rr = g.r * KF(1.001) + KF(1.0e-4);
@@ -258,7 +265,17 @@ KNIT_FN KnitLineHit knit_line_query(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARR
       t = knit_newton_closest(g, codes, rw, o, D, q.t0 + KX(cu) * KNIT_PIECE_LEN,
                               KNIT_NEWTON_CLOSEST);
       if (k_fabs(t - last_t) < KF(0.1) || k_fabs(t - prev_t) < KF(0.1)) continue;
-      h = knit_crossing(g, codes, colors, rw, o, D, t, need_exit);
+      if (mode == KNIT_QUERY_COUNT) {
+        KCurve cc = knit_row_curve_at(g, codes, rw, t);
+        KLineRel lc = knit_line_rel(cc, o, D);
+        if (lc.rho2 < g.r * g.r) {
+          prev_t = last_t;
+          last_t = t;
+          count = count + 1;
+        }
+        continue;
+      }
+      h = knit_crossing(g, codes, colors, rw, o, D, t, mode == KNIT_QUERY_EXIT ? 1 : 0);
       if (h.hit == 0) continue;
       prev_t = last_t;
       last_t = t;
@@ -277,7 +294,17 @@ KNIT_FN KnitLineHit knit_vertical_query(KnitGeom g, KNIT_ARRAY(int, codes), KNIT
                                         float x, float y) {
   float top = g.shell_top + KF(0.01);
   return knit_line_query(g, codes, colors, kv3(x, y, top), kv3(KF(0.0), KF(0.0), KF(-1.0)),
-                         KF(0.0), KF(2.0) * top, 0);
+                         KF(0.0), KF(2.0) * top, KNIT_QUERY_ENTRY);
+}
+
+/* Number of tubes the vertical line through (x, y) crosses (the layer count
+ * of the double-layer attenuation), without computing entry points. */
+KNIT_FN int knit_vertical_layers(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors), float x,
+                                 float y) {
+  float top = g.shell_top + KF(0.01);
+  KnitLineHit h = knit_line_query(g, codes, colors, kv3(x, y, top), kv3(KF(0.0), KF(0.0), KF(-1.0)), KF(0.0),
+                                  KF(2.0) * top, KNIT_QUERY_COUNT);
+  return h.crossings;
 }
 
 #endif /* KNIT_KERNEL_QUERY_H */

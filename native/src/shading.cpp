@@ -236,7 +236,7 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
   } else {
     const Vec3 o = k::kv3(x, y, sh.from_back ? -top - 0.01f : top + 0.01f);
     h = k::knit_line_query(surface_.geom(), surface_.codes(), surface_.colors(), o,
-                           k::kv3(0, 0, sh.from_back ? 1.0f : -1.0f), 0, 2 * top + 0.02f, 0);
+                           k::kv3(0, 0, sh.from_back ? 1.0f : -1.0f), 0, 2 * top + 0.02f, KNIT_QUERY_ENTRY);
     sh.steps = 1;
     if (!h.hit) {
       sh.point.p_delta = 1;
@@ -246,9 +246,8 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     h.p = k::kv3(x, y, h.p.z);
   }
   sh.pass_through = false;
-  sh.point.layers = std::max(1, k::knit_vertical_query(surface_.geom(), surface_.codes(), surface_.colors(),
-                                                       h.p.x, h.p.y)
-                                    .crossings);
+  sh.point.layers =
+      std::max(1, k::knit_vertical_layers(surface_.geom(), surface_.codes(), surface_.colors(), h.p.x, h.p.y));
   set_colors(sh, h.colour);
   // Base frame at the yarn hit.
   Vec3 ft = hit.t, fb = hit.b, fn = hit.n;
@@ -285,9 +284,21 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
 
 float KnitMaterial::transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
                                   std::array<float, 2> shift) const {
-  const KnitShade sh = shade(hit, ray_dir, frame, shift);
-  if (sh.pass_through) return 1.0f;
-  return params_.mode == KnitMode::MultiScale ? sh.point.p_delta : 0.0f;
+  // Only whether the ray meets yarn (or how often, over a footprint): no
+  // shading frame, layer count or ply profile.
+  if (params_.mode == KnitMode::MultiScale) {
+    const float S = hit.pattern_per_world, us = params_.uv_scale;
+    const float x = us * hit.u, y = us * hit.v;
+    const Vec3 wi = k::kv3_neg(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n));
+    const Vec3 kap = frame ? frame->curvature(x, y) : k::kv3(hit.kx / S, hit.ky / S, 0);
+    const k::KFootprint f =
+        k::knit_footprint(surface_.geom(), x, y, k::kv3(us * hit.dudx, us * hit.dvdx, 0),
+                          k::kv3(us * hit.dudy, us * hit.dvdy, 0), params_.footprint_points, shift[0], shift[1]);
+    return k::knit_footprint_p_delta(surface_.geom(), surface_.codes(), surface_.colors(), f, wi, kap.x, kap.y,
+                                     params_.capm_options.max_segment, params_.capm_options.max_steps);
+  }
+  if (!params_.capm) return shade(hit, ray_dir, frame, shift).pass_through ? 1.0f : 0.0f;
+  return march(hit, ray_dir, frame).state == KNIT_CAPM_HIT ? 0.0f : 1.0f;
 }
 
 k::KYarnBsdf KnitMaterial::kernel_bsdf(const KnitShade& sh) const {

@@ -66,7 +66,7 @@ std::vector<TubeCrossing> KnitSurface::crossings(float x, float y) const {
   const Vec3 o = k::kv3(x, y, top), D = k::kv3(0, 0, -1);
   float s_min = 0;
   for (int guard = 0; guard < 16; ++guard) {
-    k::KnitLineHit h = k::knit_line_query(geom_, codes(), colors(), o, D, s_min, 2 * top, 1);
+    k::KnitLineHit h = k::knit_line_query(geom_, codes(), colors(), o, D, s_min, 2 * top, KNIT_QUERY_EXIT);
     if (!h.hit) break;
     out.push_back(to_crossing(h));
     s_min = h.s_in + 1e-4f;
@@ -149,7 +149,7 @@ SurfaceHit KnitSurface::to_hit(const k::KnitCapm& st) const {
   SurfaceHit s;
   if (st.state == KNIT_CAPM_HIT) {
     s = from_line_hit(st.hit);
-    s.layers = k::knit_vertical_query(geom_, codes(), colors(), st.hit.p.x, st.hit.p.y).crossings;
+    s.layers = k::knit_vertical_layers(geom_, codes(), colors(), st.hit.p.x, st.hit.p.y);
   }
   s.steps = st.steps;
   return s;
