@@ -59,23 +59,14 @@ int run(const std::vector<std::string>& args) {
   }
   if (mesh_file.empty()) throw UsageError{"no mesh given"};
   if (out_file.empty()) throw UsageError{"no output given (-o FRAMES.exr)"};
-  try {
-    Warnings warnings;
-    const TriangleMesh mesh = load_mesh(mesh_file, &warnings);
-    for (const std::string& w : warnings.messages) std::fprintf(stderr, "knitshade bake-frames: warning: %s\n", w.c_str());
-    const BakeResult r = bake_frames(mesh, out_file, s);
-    std::printf("baked %dx%d frames of %s over UV [%g, %g] x [%g, %g] (%.1f%% of texels inside the mesh) to %s\n",
-                r.width, r.height, mesh_file.c_str(), r.uv_min.x, r.uv_max.x, r.uv_min.y, r.uv_max.y,
-                100.0 * static_cast<double>(r.covered) / (static_cast<double>(r.width) * r.height), out_file.c_str());
-    return 0;
-  } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "knitshade bake-frames: error: out of memory\n");
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "knitshade bake-frames: error: %s\n", e.what());
-  } catch (...) {
-    std::fprintf(stderr, "knitshade bake-frames: error: unexpected failure\n");
-  }
-  return 1;
+  Warnings warnings;
+  const TriangleMesh mesh = load_mesh(mesh_file, &warnings);
+  for (const std::string& w : warnings.messages) std::fprintf(stderr, "knitshade bake-frames: warning: %s\n", w.c_str());
+  const BakeResult r = bake_frames(mesh, out_file, s);
+  std::printf("baked %dx%d frames of %s over UV [%g, %g] x [%g, %g] (%.1f%% of texels inside the mesh) to %s\n",
+              r.width, r.height, mesh_file.c_str(), r.uv_min.x, r.uv_max.x, r.uv_min.y, r.uv_max.y,
+              100.0 * static_cast<double>(r.covered) / (static_cast<double>(r.width) * r.height), out_file.c_str());
+  return 0;
 }
 
 const bool registered = register_command({"bake-frames", "bake a mesh's normal and tangent over UV space to EXR", &run});

@@ -75,20 +75,11 @@ int run(const std::vector<std::string>& args) {
   if (job.output_file.empty()) throw UsageError{"no output image given (-o IMAGE.exr or -o IMAGE.png)"};
   job.progress = quiet ? ProgressMode::Quiet : ProgressMode::Auto;
 
-  try {
-    const RenderJobResult r = run_render_job(job, [](const std::string& w) {
-      std::fprintf(stderr, "knitshade render: warning: %s\n", w.c_str());
-    });
-    if (!quiet) std::printf("%s", r.report.to_text().c_str());
-    return 0;
-  } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "knitshade render: error: out of memory\n");
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "knitshade render: error: %s\n", e.what());
-  } catch (...) {
-    std::fprintf(stderr, "knitshade render: error: unexpected failure\n");
-  }
-  return 1;
+  const RenderJobResult r = run_render_job(job, [](const std::string& w) {
+    std::fprintf(stderr, "knitshade render: warning: %s\n", w.c_str());
+  });
+  if (!quiet) std::printf("%s", r.report.to_text().c_str());
+  return 0;
 }
 
 const bool registered = register_command({"render", "render a scene file to an EXR or PNG image", &run});
