@@ -8,6 +8,7 @@
 #define KNIT_STRUCT_END(Name) };
 #define KNIT_ARRAY(T, name) T name[]
 #define KNIT_NOARGS
+#define KNIT_IN(T) T
 
 #define kvec3 vector
 #define kv3(x, y, z) vector(x, y, z)

@@ -65,14 +65,14 @@ KNIT_FN float bsdf_att_chord(kvec3 d) {
 }
 
 /* tau for a path seen along wo (towards the viewer) and wi (towards the light). */
-KNIT_FN float bsdf_att_tau(KAttenuation a, kvec3 wo, kvec3 wi) {
+KNIT_FN float bsdf_att_tau(KNIT_IN(KAttenuation) a, kvec3 wo, kvec3 wi) {
   int n = k_maxi(1, k_mini(a.layers, KB_MAX_LAYERS));
   float l = KF(0.5) * (bsdf_att_chord(wo) + bsdf_att_chord(wi));
   return k_exp(-a.optical_depth * KFLT(n) * l);
 }
 
 /* tau of the straight-through path wi = -wo (used to weigh lobes for sampling). */
-KNIT_FN float bsdf_att_tau_straight(KAttenuation a, kvec3 wo) {
+KNIT_FN float bsdf_att_tau_straight(KNIT_IN(KAttenuation) a, kvec3 wo) {
   return bsdf_att_tau(a, wo, kv3_neg(wo));
 }
 

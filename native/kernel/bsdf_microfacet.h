@@ -162,7 +162,7 @@ KNIT_FN float mf_refl_pdf_up(float ax, float ay, kvec3 o, kvec3 h) {
 
 /* Eval of the reflection configuration in the upper hemisphere, with the
  * Fresnel factor chosen by `transmit` (0: F, 1: (1 - F)^2). Returns f * i.z. */
-KNIT_FN float mf_eval_up(KMicrofacet m, kvec3 o, kvec3 i, int transmit) {
+KNIT_FN float mf_eval_up(KNIT_IN(KMicrofacet) m, kvec3 o, kvec3 i, int transmit) {
   float ax = k_fmax(m.alpha_x, KB_ALPHA_MIN);
   float ay = k_fmax(m.alpha_y, KB_ALPHA_MIN);
   kvec3 hs = kv3_add(o, i);
@@ -175,7 +175,7 @@ KNIT_FN float mf_eval_up(KMicrofacet m, kvec3 o, kvec3 i, int transmit) {
   return fac * mf_refl_core(ax, ay, o, i, h) * KZ(i);
 }
 
-KNIT_FN float mf_pdf_up(KMicrofacet m, kvec3 o, kvec3 i) {
+KNIT_FN float mf_pdf_up(KNIT_IN(KMicrofacet) m, kvec3 o, kvec3 i) {
   float ax = k_fmax(m.alpha_x, KB_ALPHA_MIN);
   float ay = k_fmax(m.alpha_y, KB_ALPHA_MIN);
   kvec3 hs = kv3_add(o, i);
@@ -185,7 +185,7 @@ KNIT_FN float mf_pdf_up(KMicrofacet m, kvec3 o, kvec3 i) {
 
 /* Sample of the upper-hemisphere reflection configuration from o (o.z > 0);
  * the returned wi has wi.z > 0 (the caller mirrors it for transmission). */
-KNIT_FN KBsdfSample mf_sample_up(KMicrofacet m, kvec3 o, float u1, float u2, int transmit) {
+KNIT_FN KBsdfSample mf_sample_up(KNIT_IN(KMicrofacet) m, kvec3 o, float u1, float u2, int transmit) {
   float ax = k_fmax(m.alpha_x, KB_ALPHA_MIN);
   float ay = k_fmax(m.alpha_y, KB_ALPHA_MIN);
   kvec3 h, i;
@@ -210,7 +210,7 @@ KNIT_FN KBsdfSample mf_sample_up(KMicrofacet m, kvec3 o, float u1, float u2, int
 
 /* ---- Specular reflection f_x^S ------------------------------------------ */
 
-KNIT_FN kvec3 bsdf_mf_reflect_eval(KMicrofacet m, kvec3 wo, kvec3 wi) {
+KNIT_FN kvec3 bsdf_mf_reflect_eval(KNIT_IN(KMicrofacet) m, kvec3 wo, kvec3 wi) {
   float s = kb_side(wo);
   float v;
   if (KZ(wo) * KZ(wi) <= KF(0.0)) return KB_BLACK;
@@ -218,13 +218,13 @@ KNIT_FN kvec3 bsdf_mf_reflect_eval(KMicrofacet m, kvec3 wo, kvec3 wi) {
   return kv3(v, v, v);
 }
 
-KNIT_FN float bsdf_mf_reflect_pdf(KMicrofacet m, kvec3 wo, kvec3 wi) {
+KNIT_FN float bsdf_mf_reflect_pdf(KNIT_IN(KMicrofacet) m, kvec3 wo, kvec3 wi) {
   float s = kb_side(wo);
   if (KZ(wo) * KZ(wi) <= KF(0.0)) return KF(0.0);
   return mf_pdf_up(m, kb_flip_z(wo, s), kb_flip_z(wi, s));
 }
 
-KNIT_FN KBsdfSample bsdf_mf_reflect_sample(KMicrofacet m, kvec3 wo, float u1, float u2) {
+KNIT_FN KBsdfSample bsdf_mf_reflect_sample(KNIT_IN(KMicrofacet) m, kvec3 wo, float u1, float u2) {
   float s = kb_side(wo);
   KBsdfSample r = mf_sample_up(m, kb_flip_z(wo, s), u1, u2, 0);
   r.wi = kb_flip_z(r.wi, s);
@@ -233,7 +233,7 @@ KNIT_FN KBsdfSample bsdf_mf_reflect_sample(KMicrofacet m, kvec3 wo, float u1, fl
 
 /* ---- Specular transmission f_y^S (thin slab, see the header comment) ------- */
 
-KNIT_FN kvec3 bsdf_mf_transmit_eval(KMicrofacet m, kvec3 wo, kvec3 wi) {
+KNIT_FN kvec3 bsdf_mf_transmit_eval(KNIT_IN(KMicrofacet) m, kvec3 wo, kvec3 wi) {
   float s = kb_side(wo);
   float v;
   if (KZ(wo) * KZ(wi) >= KF(0.0)) return KB_BLACK;
@@ -241,13 +241,13 @@ KNIT_FN kvec3 bsdf_mf_transmit_eval(KMicrofacet m, kvec3 wo, kvec3 wi) {
   return kv3(v, v, v);
 }
 
-KNIT_FN float bsdf_mf_transmit_pdf(KMicrofacet m, kvec3 wo, kvec3 wi) {
+KNIT_FN float bsdf_mf_transmit_pdf(KNIT_IN(KMicrofacet) m, kvec3 wo, kvec3 wi) {
   float s = kb_side(wo);
   if (KZ(wo) * KZ(wi) >= KF(0.0)) return KF(0.0);
   return mf_pdf_up(m, kb_flip_z(wo, s), kb_flip_z(wi, -s));
 }
 
-KNIT_FN KBsdfSample bsdf_mf_transmit_sample(KMicrofacet m, kvec3 wo, float u1, float u2) {
+KNIT_FN KBsdfSample bsdf_mf_transmit_sample(KNIT_IN(KMicrofacet) m, kvec3 wo, float u1, float u2) {
   float s = kb_side(wo);
   KBsdfSample r = mf_sample_up(m, kb_flip_z(wo, s), u1, u2, 1);
   r.wi = kb_flip_z(r.wi, -s);

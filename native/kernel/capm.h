@@ -48,7 +48,7 @@ KNIT_STRUCT_END(KnitCapm)
 
 /* Start at (x, y, shell_top) travelling along -wi (wi in the local frame at
  * (x, y), pointing from the surface to the viewer). */
-KNIT_FN KnitCapm knit_capm_begin(KnitGeom g, float x, float y, kvec3 wi_local) {
+KNIT_FN KnitCapm knit_capm_begin(KNIT_IN(KnitGeom) g, float x, float y, kvec3 wi_local) {
   KnitCapm st;
   st.p = kv3(x, y, g.shell_top);
   st.D = kv3_neg(kv3_normalize(wi_local));
@@ -74,7 +74,7 @@ KNIT_FN KnitCapm knit_capm_begin_at(kvec3 p, kvec3 dir_local) {
 
 /* Length of the next segment along st.D: to the shell's bottom (descending)
  * or top (climbing), and at most max_segment of horizontal travel. */
-KNIT_FN float knit_capm_segment(KnitGeom g, KnitCapm st, float max_segment) {
+KNIT_FN float knit_capm_segment(KNIT_IN(KnitGeom) g, KNIT_IN(KnitCapm) st, float max_segment) {
   float dz = KZ(st.D);
   float hs = k_sqrt(KX(st.D) * KX(st.D) + KY(st.D) * KY(st.D));
   float len = K_BIG;
@@ -86,8 +86,8 @@ KNIT_FN float knit_capm_segment(KnitGeom g, KnitCapm st, float max_segment) {
 
 /* One segment of length len along st.D (see knit_capm_segment); kx, ky: base
  * curvature for the metric (0 when unknown). */
-KNIT_FN KnitCapm knit_capm_step_len(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
-                                    KnitCapm in, float len, int max_steps, float kx, float ky) {
+KNIT_FN KnitCapm knit_capm_step_len(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+                                    KNIT_IN(KnitCapm) in, float len, int max_steps, float kx, float ky) {
   KnitCapm st = in;
   float dz = KZ(st.D);
   float eps = KF(1.0e-4) * g.shell_top;
@@ -114,21 +114,21 @@ KNIT_FN KnitCapm knit_capm_step_len(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARR
   return st;
 }
 
-KNIT_FN KnitCapm knit_capm_step(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
-                                KnitCapm st, float max_segment, int max_steps, float kx, float ky) {
+KNIT_FN KnitCapm knit_capm_step(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+                                KNIT_IN(KnitCapm) st, float max_segment, int max_steps, float kx, float ky) {
   return knit_capm_step_len(g, codes, colors, st, knit_capm_segment(g, st, max_segment), max_steps,
                             kx, ky);
 }
 
 /* Midpoint of the next segment (where a second-order march fetches the frame). */
-KNIT_FN kvec3 knit_capm_midpoint(KnitGeom g, KnitCapm st, float max_segment) {
+KNIT_FN kvec3 knit_capm_midpoint(KNIT_IN(KnitGeom) g, KNIT_IN(KnitCapm) st, float max_segment) {
   return kv3_madd(st.p, st.D, KF(0.5) * knit_capm_segment(g, st, max_segment));
 }
 
 /* Use dir_local (the ray in the frame at the segment's midpoint) for the
  * segment about to be marched: the midpoint rule, second order in the
  * segment length on a curved base. */
-KNIT_FN KnitCapm knit_capm_aim(KnitCapm in, kvec3 dir_local) {
+KNIT_FN KnitCapm knit_capm_aim(KNIT_IN(KnitCapm) in, kvec3 dir_local) {
   KnitCapm st = in;
   if (st.state == KNIT_CAPM_MARCHING) st.D = kv3_normalize(dir_local);
   return st;
@@ -140,11 +140,11 @@ KNIT_FN KnitCapm knit_capm_aim(KnitCapm in, kvec3 dir_local) {
  * the segment is then re-marched to just past the hit with that direction,
  * which is right to second order in the (shorter) distance to the hit. The
  * original hit is kept if the re-marched segment misses. */
-KNIT_FN kvec3 knit_capm_hit_midpoint(KnitCapm before, KnitCapm hit) {
+KNIT_FN kvec3 knit_capm_hit_midpoint(KNIT_IN(KnitCapm) before, KNIT_IN(KnitCapm) hit) {
   return kv3_madd(before.p, before.D, KF(0.5) * k_fmax(hit.hit.s_in, KF(0.0)));
 }
-KNIT_FN KnitCapm knit_capm_correct(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
-                                   KnitCapm before, KnitCapm hit, kvec3 dir_local, float max_segment,
+KNIT_FN KnitCapm knit_capm_correct(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+                                   KNIT_IN(KnitCapm) before, KNIT_IN(KnitCapm) hit, kvec3 dir_local, float max_segment,
                                    float kx, float ky) {
   KnitCapm again = knit_capm_aim(before, dir_local);
   float len = k_fmin(knit_capm_segment(g, again, max_segment),
@@ -158,7 +158,7 @@ KNIT_FN KnitCapm knit_capm_correct(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRA
 /* Re-express the ray in the frame at the new point: the host passes the
  * world ray direction's components in that frame. A ray that now climbs
  * while already at the shell top has bent away. */
-KNIT_FN KnitCapm knit_capm_bend(KnitGeom g, KnitCapm in, kvec3 dir_local) {
+KNIT_FN KnitCapm knit_capm_bend(KNIT_IN(KnitGeom) g, KNIT_IN(KnitCapm) in, kvec3 dir_local) {
   KnitCapm st = in;
   if (st.state != KNIT_CAPM_MARCHING) return st;
   st.D = kv3_normalize(dir_local);
@@ -187,7 +187,7 @@ KNIT_FN kvec3 knit_curved_frame_dir(kvec3 d0, float kx, float ky, float dx, floa
  * (the mesh is the shell's top), so the ray crossed the shell before reaching
  * (x, y, shell_top): it is marched from where it entered the shell's bottom,
  * going up; leaving through the top (ESCAPED) means it passed through. */
-KNIT_FN KnitCapm knit_capm_start(KnitGeom g, float x, float y, kvec3 wi_local) {
+KNIT_FN KnitCapm knit_capm_start(KNIT_IN(KnitGeom) g, float x, float y, kvec3 wi_local) {
   kvec3 d = kv3_neg(kv3_normalize(wi_local));
   if (KZ(d) > KF(1.0e-6)) {
     float back = KF(2.0) * g.shell_top / KZ(d);
@@ -199,8 +199,8 @@ KNIT_FN KnitCapm knit_capm_start(KnitGeom g, float x, float y, kvec3 wi_local) {
 /* March st on a base of constant curvature (flat: kx = ky = 0) whose frame at
  * (x, y) sees the ray as d0: midpoint rule and hit corrector as in the host
  * loop (KnitSurface::capm). */
-KNIT_FN KnitCapm knit_capm_march_curved(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
-                                        KnitCapm start, float x, float y, kvec3 d0, float kx, float ky,
+KNIT_FN KnitCapm knit_capm_march_curved(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+                                        KNIT_IN(KnitCapm) start, float x, float y, kvec3 d0, float kx, float ky,
                                         float max_segment, int max_steps) {
   KnitCapm st = start;
   int curved = (kx != KF(0.0) || ky != KF(0.0)) ? 1 : 0;
@@ -229,7 +229,7 @@ KNIT_FN KnitCapm knit_capm_march_curved(KnitGeom g, KNIT_ARRAY(int, codes), KNIT
  * (knit_capm_start), on a base of constant curvature (flat: kx = ky = 0):
  * what hosts without a frame field run (OSL, with the shading point's
  * curvature). */
-KNIT_FN KnitCapm knit_capm_curved(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+KNIT_FN KnitCapm knit_capm_curved(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
                                   float x, float y, kvec3 wi_local, float kx, float ky,
                                   float max_segment, int max_steps) {
   KnitCapm st = knit_capm_start(g, x, y, wi_local);

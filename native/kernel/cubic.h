@@ -25,7 +25,7 @@ KNIT_FN KRoots kroots_none(KNIT_NOARGS) {
   return r;
 }
 
-KNIT_FN KRoots kroots_sort(KRoots in) {
+KNIT_FN KRoots kroots_sort(KNIT_IN(KRoots) in) {
   KRoots r = in;
   float t;
   if (r.n >= 2 && r.r1 < r.r0) { t = r.r0; r.r0 = r.r1; r.r1 = t; }
@@ -93,10 +93,13 @@ KNIT_FN KRoots solve_cubic(float a3, float a2, float a1, float a0) {
     } else {
       float m = KF(2.0) * k_sqrt(-tp);
       float phi = k_safe_acos(KF(3.0) * q / (p * m)) / KF(3.0);
+      /* cos(phi - 2pi/3) and cos(phi - 4pi/3) from cos phi and sin phi */
+      float cp = k_cos(phi), sp = k_sin(phi);
+      float hc = KF(-0.5) * cp, hs = KF(0.86602540378443864676) * sp;
       r.n = 3;
-      r.r0 = m * k_cos(phi) - b3;
-      r.r1 = m * k_cos(phi - KF(2.0943951023931954923)) - b3;
-      r.r2 = m * k_cos(phi - KF(4.1887902047863909846)) - b3;
+      r.r0 = m * cp - b3;
+      r.r1 = m * (hc + hs) - b3;
+      r.r2 = m * (hc - hs) - b3;
     }
     r.r0 = cubic_newton(a3, a2, a1, a0, r.r0);
     if (r.n == 3) {

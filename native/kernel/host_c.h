@@ -9,6 +9,7 @@
  *   KNIT_STRUCT(Name)     opens a struct declaration, KNIT_STRUCT_END(Name) closes it
  *   KNIT_ARRAY(T, name)   a read-only array parameter of unknown length
  *   KNIT_NOARGS           the parameter list of a function without parameters
+ *   KNIT_IN(T)            a struct parameter (C++: const T&, C and OSL: T)
  *   kvec3, kv3(x,y,z)     3-vector type and constructor; KX/KY/KZ component access
  *   KF(x)                 a float literal (C: single precision, no double promotion)
  *   KINT(x), KFLT(i)      conversions
@@ -20,11 +21,20 @@
 #define KNIT_KERNEL_HOST_C_H
 
 #include <math.h>
+#include <string.h>
 
 #ifdef __cplusplus
 #define KNIT_FN static inline
 #else
 #define KNIT_FN static inline
+#endif
+
+/* Struct parameters: C++ takes them by const reference (the kernel never
+ * assigns to a parameter, see docs/kernel-subset.md), C by value. */
+#ifdef __cplusplus
+#define KNIT_IN(T) const T&
+#else
+#define KNIT_IN(T) T
 #endif
 
 #define KNIT_STRUCT(Name) typedef struct Name {
@@ -67,11 +77,26 @@ KNIT_FN kvec3 kv3(float x, float y, float z) {
 #define k_floor(x) floorf(x)
 #define k_ceil(x) ceilf(x)
 #define k_fabs(x) fabsf(x)
-#define k_cbrt(x) cbrtf(x)
+#define k_cbrt(x) knit_host_cbrt(x)
 /* Plain comparisons (not fminf/fmaxf, which are libm calls without
  * -ffast-math); inputs are never NaN in the kernel. */
 KNIT_FN float knit_host_fmin(float a, float b) { return a < b ? a : b; }
 KNIT_FN float knit_host_fmax(float a, float b) { return a > b ? a : b; }
+/* Cube root without libm's cbrtf (the costliest call of the cubic solver):
+ * a first guess from the bits (exponent divided by three) and three Newton
+ * steps, a few ulp from the exact root over [1e-30, 1e30]; cbrtf elsewhere
+ * (zero, tiny, huge, inf, NaN). tests/native/test_cubic.cpp checks it. */
+KNIT_FN float knit_host_cbrt(float x) {
+  float ax = fabsf(x), y;
+  unsigned int i;
+  int it;
+  if (!(ax >= 1.0e-30f && ax <= 1.0e30f)) return cbrtf(x);
+  memcpy(&i, &ax, sizeof i);
+  i = i / 3u + 709921077u;
+  memcpy(&y, &i, sizeof y);
+  for (it = 0; it < 3; it++) y = y - (y * y * y - ax) / (3.0f * y * y);
+  return x < 0.0f ? -y : y;
+}
 #define k_fmin(a, b) knit_host_fmin(a, b)
 #define k_fmax(a, b) knit_host_fmax(a, b)
 #define k_isfinite(x) isfinite(x)

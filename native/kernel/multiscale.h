@@ -91,7 +91,7 @@ KNIT_STRUCT(KFootprint)
   int n;               /* points */
 KNIT_STRUCT_END(KFootprint)
 
-KNIT_FN KFootprint knit_footprint(KnitGeom g, float x, float y, kvec3 fx, kvec3 fy, int n_points,
+KNIT_FN KFootprint knit_footprint(KNIT_IN(KnitGeom) g, float x, float y, kvec3 fx, kvec3 fy, int n_points,
                                   float shift_x, float shift_y) {
   KFootprint f;
   float cw = K_2PI, ch = g.row_spacing;
@@ -117,7 +117,7 @@ KNIT_FN KFootprint knit_footprint(KnitGeom g, float x, float y, kvec3 fx, kvec3 
 }
 
 /* Point i of the footprint (KZ unused). */
-KNIT_FN kvec3 knit_footprint_point(KnitGeom g, KFootprint f, int i) {
+KNIT_FN kvec3 knit_footprint_point(KNIT_IN(KnitGeom) g, KNIT_IN(KFootprint) f, int i) {
   kvec3 q = knit_sobol2(i);
   float ox = knit_frac(KX(q) + f.shift_x);
   float oy = knit_frac(KY(q) + f.shift_y);
@@ -133,8 +133,8 @@ KNIT_FN kvec3 knit_footprint_point(KnitGeom g, KFootprint f, int i) {
 
 /* Only p_delta of knit_aggregate (same points, same marches): what a shadow
  * ray crossing a multi-scale fabric needs. */
-KNIT_FN float knit_footprint_p_delta(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
-                                     KFootprint f, kvec3 wi_local, float kx, float ky, float max_segment,
+KNIT_FN float knit_footprint_p_delta(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+                                     KNIT_IN(KFootprint) f, kvec3 wi_local, float kx, float ky, float max_segment,
                                      int max_steps) {
   int i, hits = 0;
   for (i = 0; i < f.n; i++) {
@@ -152,7 +152,7 @@ KNIT_FN float knit_footprint_p_delta(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_AR
  * same local view direction wi_local (the frame is treated as constant across
  * the footprint, which the footprint's smallness justifies); wi_local.z < 0
  * views the fabric from behind (knit_capm_start). */
-KNIT_FN KnitAggregate knit_aggregate(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+KNIT_FN KnitAggregate knit_aggregate(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
                                      float x, float y, kvec3 fx, kvec3 fy, kvec3 wi_local,
                                      int n_points, float shift_x, float shift_y, float kx, float ky,
                                      float max_segment, int max_steps) {

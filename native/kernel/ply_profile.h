@@ -215,18 +215,18 @@ KNIT_FN KPlyRing ply_ring_eval(int n, float c, float a, float psi_in) {
 }
 
 /* The ply phase psi of (phi, s), reduced to [-pi/N, pi/N). */
-KNIT_FN float ply_phase(KPlyParams p, float phi, float s) {
+KNIT_FN float ply_phase(KNIT_IN(KPlyParams) p, float phi, float s) {
   return kply_reduce(phi - p.ply_rate * s, K_2PI / KFLT(k_maxi(p.ply_count, 1)));
 }
 
 /* The fibre phase chi, given the ply phase psi and the ply normal tilt delta
  * (theta = psi + delta is the angle around the ply axis). */
-KNIT_FN float ply_fiber_phase(KPlyParams p, float psi, float delta, float s) {
+KNIT_FN float ply_fiber_phase(KNIT_IN(KPlyParams) p, float psi, float delta, float s) {
   return kply_reduce(psi + delta - p.fiber_rate * s, K_2PI / KFLT(k_maxi(p.fiber_ring, 1)));
 }
 
 /* Frame and shadow from the profile values at the point. */
-KNIT_FN KPlyShade ply_shade_assemble(KPlyParams p, float psi, float ply_shadow, float delta,
+KNIT_FN KPlyShade ply_shade_assemble(KNIT_IN(KPlyParams) p, float psi, float ply_shadow, float delta,
                                      float fiber_shadow) {
   KPlyShade o;
   float rho = p.ply_center * k_cos(psi) + p.ply_radius * k_cos(delta);
@@ -243,7 +243,7 @@ KNIT_FN KPlyShade ply_shade_assemble(KPlyParams p, float psi, float ply_shadow, 
   return o;
 }
 
-KNIT_FN KPlyShade ply_shade_procedural(KPlyParams p, float phi, float s) {
+KNIT_FN KPlyShade ply_shade_procedural(KNIT_IN(KPlyParams) p, float phi, float s) {
   float psi = ply_phase(p, phi, s);
   KPlyRing pr = ply_ring_eval(p.ply_count, p.ply_center, p.ply_radius, psi);
   KPlyRing fr = ply_ring_eval(p.fiber_ring, p.fiber_center, p.fiber_radius,
@@ -263,7 +263,7 @@ KNIT_FN float ply_table_phase(int j, float period) {
 
 /* Entry i (0 <= i < KPLY_TABLE_SIZE) of the table: channel i / KPLY_TABLE_N
  * (0 ply shadow, 1 ply normal tilt, 2 fibre shadow) at sample j = i mod N. */
-KNIT_FN float ply_table_value(KPlyParams p, int i) {
+KNIT_FN float ply_table_value(KNIT_IN(KPlyParams) p, int i) {
   int ch = i / KPLY_TABLE_N;
   int j = i - ch * KPLY_TABLE_N;
   KPlyRing r;
@@ -288,7 +288,7 @@ KNIT_FN float ply_table_interp(KNIT_ARRAY(float, table), int ch, float x, float 
   return table[base] + (table[base + 1] - table[base]) * w;
 }
 
-KNIT_FN KPlyShade ply_shade_lookup(KNIT_ARRAY(float, table), KPlyParams p, float phi, float s) {
+KNIT_FN KPlyShade ply_shade_lookup(KNIT_ARRAY(float, table), KNIT_IN(KPlyParams) p, float phi, float s) {
   float psi = ply_phase(p, phi, s);
   float period = K_2PI / KFLT(k_maxi(p.ply_count, 1));
   float gp = ply_table_interp(table, 0, psi, period);
@@ -300,6 +300,6 @@ KNIT_FN KPlyShade ply_shade_lookup(KNIT_ARRAY(float, table), KPlyParams p, float
 }
 
 /* v (in the yarn's local frame) expressed in the perturbed frame (t, b, n). */
-KNIT_FN kvec3 ply_to_local(KPlyShade f, kvec3 v) { return kv3_to_local(v, f.t, f.b, f.n); }
+KNIT_FN kvec3 ply_to_local(KNIT_IN(KPlyShade) f, kvec3 v) { return kv3_to_local(v, f.t, f.b, f.n); }
 
 #endif /* KNIT_KERNEL_PLY_PROFILE_H */

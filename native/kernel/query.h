@@ -58,7 +58,7 @@ KNIT_FN KnitLineHit knit_line_hit_none(KNIT_NOARGS) {
 }
 
 /* Segment [pa, pb] against an axis-aligned box (slab test). */
-KNIT_FN int knit_segment_box(kvec3 pa, kvec3 pb, KBox b) {
+KNIT_FN int knit_segment_box(kvec3 pa, kvec3 pb, KNIT_IN(KBox) b) {
   float t0 = KF(0.0), t1 = KF(1.0);
   kvec3 dv = kv3_sub(pb, pa);
   float da[3], lo[3], hi[3], pv[3];
@@ -81,9 +81,16 @@ KNIT_FN int knit_segment_box(kvec3 pa, kvec3 pb, KBox b) {
   return 1;
 }
 
+/* Whether box b grown by m overlaps the box [lo, hi]: the cheap test that
+ * rejects most pieces before the slab test. */
+KNIT_FN int knit_box_overlap(KNIT_IN(KBox) b, float m, kvec3 lo, kvec3 hi) {
+  return KX(b.lo) - m <= KX(hi) && KX(b.hi) + m >= KX(lo) && KY(b.lo) - m <= KY(hi) &&
+         KY(b.hi) + m >= KY(lo) && KZ(b.lo) - m <= KZ(hi) && KZ(b.hi) + m >= KZ(lo);
+}
+
 /* Closest point of a quadratic piece to the line (o, D): u in [0, 1] and the
  * squared distance, from the cubic d/du |P_perp(Q(u) - o)|^2 = 0. KX = u, KY = rho^2. */
-KNIT_FN kvec3 knit_quad_closest(KQuad q, kvec3 o, kvec3 D) {
+KNIT_FN kvec3 knit_quad_closest(KNIT_IN(KQuad) q, kvec3 o, kvec3 D) {
   kvec3 A0 = kv3_sub(q.q0, o);
   kvec3 A = kv3_madd(A0, D, -kv3_dot(A0, D));
   kvec3 B = kv3_madd(q.q1, D, -kv3_dot(q.q1, D));
@@ -117,7 +124,7 @@ KNIT_STRUCT(KLineRel)
   float phi2;  /* d2/dt2 rho^2 / 2 */
 KNIT_STRUCT_END(KLineRel)
 
-KNIT_FN KLineRel knit_line_rel(KCurve cv, kvec3 o, kvec3 D) {
+KNIT_FN KLineRel knit_line_rel(KNIT_IN(KCurve) cv, kvec3 o, kvec3 D) {
   KLineRel lr;
   kvec3 q = kv3_sub(cv.p, o);
   kvec3 e;
@@ -132,7 +139,7 @@ KNIT_FN KLineRel knit_line_rel(KCurve cv, kvec3 o, kvec3 D) {
 }
 
 /* Newton on the exact squared distance to the line. */
-KNIT_FN float knit_newton_closest(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, kvec3 o, kvec3 D,
+KNIT_FN float knit_newton_closest(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, kvec3 o, kvec3 D,
                                   float t_start, int iters) {
   float t = t_start;
   int i;
@@ -155,7 +162,7 @@ KNIT_STRUCT_END(KExtreme)
  * +1 the exit. Safeguarded Newton: a step that leaves the tube (rho >= r) or
  * lowers the objective is halved. Returns the last point evaluated (rho may be
  * >= r when t_start was outside the tube). */
-KNIT_FN KExtreme knit_newton_extreme(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, kvec3 o, kvec3 D,
+KNIT_FN KExtreme knit_newton_extreme(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, kvec3 o, kvec3 D,
                                      float t_start, float sgn, int iters) {
   KExtreme e;
   float r2 = g.r * g.r;
@@ -196,8 +203,8 @@ KNIT_FN KExtreme knit_newton_extreme(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw
 /* The crossing of row k's tube found from curve parameter t (already near the
  * closest point to the line). Fills s_in, s_out, t, p, n, tangent, row, col, code,
  * color; hit = 1 when the line does pass through the tube. */
-KNIT_FN KnitLineHit knit_crossing(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
-                                  KRow rw, kvec3 o, kvec3 D, float t_close, int need_exit) {
+KNIT_FN KnitLineHit knit_crossing(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+                                  KNIT_IN(KRow) rw, kvec3 o, kvec3 D, float t_close, int need_exit) {
   KnitLineHit h = knit_line_hit_none();
   float r2 = g.r * g.r;
   KExtreme ein = knit_newton_extreme(g, codes, rw, o, D, t_close, KF(-1.0), KNIT_NEWTON_EXTREME);
@@ -233,7 +240,7 @@ KNIT_FN KnitLineHit knit_crossing(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY
  * up to s_max whose tube may reach s_min; COUNT counts the tubes the line
  * passes within r of, from the closest points alone (what the layer count
  * under a point needs, at a fraction of the cost). */
-KNIT_FN KnitLineHit knit_line_query(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
                                     kvec3 o, kvec3 D, float s_min, float s_max, int mode) {
   KnitLineHit best = knit_line_hit_none();
   kvec3 pa = kv3_madd(o, D, s_min), pb = kv3_madd(o, D, s_max);
@@ -248,6 +255,16 @@ KNIT_FN KnitLineHit knit_line_query(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARR
   int g1 = KINT(k_floor((xmax + rr + xa) / KNIT_PIECE_LEN));
   int count = 0;
   int k, gp;
+  /* The segment's bounding box; for a segment along a coordinate axis (the
+   * vertical query) box overlap is the exact slab test. */
+  kvec3 seg_lo = kv3(xmin, ymin, k_fmin(KZ(pa), KZ(pb)));
+  kvec3 seg_hi = kv3(xmax, ymax, k_fmax(KZ(pa), KZ(pb)));
+  int axis = (KX(D) == KF(0.0) && KY(D) == KF(0.0)) || (KX(D) == KF(0.0) && KZ(D) == KF(0.0)) ||
+             (KY(D) == KF(0.0) && KZ(D) == KF(0.0)) ? 1 : 0;
+  /* The exact piece bounds refine only z (and slip-stitch floats): skip them
+   * when the segment spans the whole shell in z. */
+  int skip_exact = axis != 0 && g.has_floats == 0 && KZ(seg_lo) <= -g.shell_top && KZ(seg_hi) >= g.shell_top
+                       ? 1 : 0;
   for (k = k0; k <= k1; k++) {
     float last_t = -K_BIG, prev_t = -K_BIG;
     KRow rw = knit_row(g, k);
@@ -257,8 +274,14 @@ KNIT_FN KnitLineHit knit_line_query(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARR
       float t;
       KnitLineHit h;
       /* Cheap cull first (no pattern lookups), then the exact piece box. */
-      if (knit_segment_box(pa, pb, kbox_grow(knit_piece_bounds_xy(g, rw.yk, gp), rr)) == 0) continue;
-      if (knit_segment_box(pa, pb, kbox_grow(knit_piece_bounds(g, codes, rw, gp), rr)) == 0) continue;
+      KBox bx = knit_piece_bounds_xy(g, rw.yk, gp);
+      if (knit_box_overlap(bx, rr, seg_lo, seg_hi) == 0) continue;
+      if (axis == 0 && knit_segment_box(pa, pb, kbox_grow(bx, rr)) == 0) continue;
+      if (skip_exact == 0) {
+        bx = knit_piece_bounds(g, codes, rw, gp);
+        if (knit_box_overlap(bx, rr, seg_lo, seg_hi) == 0) continue;
+        if (axis == 0 && knit_segment_box(pa, pb, kbox_grow(bx, rr)) == 0) continue;
+      }
       q = knit_piece_quad(g, codes, rw, gp);
       cu = knit_quad_closest(q, o, D);
       if (KY(cu) > m * m) continue;
@@ -290,7 +313,7 @@ KNIT_FN KnitLineHit knit_line_query(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARR
 /* Vertical query at (x, y): the first tube surface seen from above, and the
  * number of tubes the vertical line crosses (paper's height query, made right
  * for overlapping layers). */
-KNIT_FN KnitLineHit knit_vertical_query(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
+KNIT_FN KnitLineHit knit_vertical_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
                                         float x, float y) {
   float top = g.shell_top + KF(0.01);
   return knit_line_query(g, codes, colors, kv3(x, y, top), kv3(KF(0.0), KF(0.0), KF(-1.0)),
@@ -299,7 +322,7 @@ KNIT_FN KnitLineHit knit_vertical_query(KnitGeom g, KNIT_ARRAY(int, codes), KNIT
 
 /* Number of tubes the vertical line through (x, y) crosses (the layer count
  * of the double-layer attenuation), without computing entry points. */
-KNIT_FN int knit_vertical_layers(KnitGeom g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors), float x,
+KNIT_FN int knit_vertical_layers(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors), float x,
                                  float y) {
   float top = g.shell_top + KF(0.01);
   KnitLineHit h = knit_line_query(g, codes, colors, kv3(x, y, top), kv3(KF(0.0), KF(0.0), KF(-1.0)), KF(0.0),

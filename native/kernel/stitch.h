@@ -87,15 +87,15 @@ KNIT_FN KnitGeom knit_geom_make(float a, float h, float d, float r, int rows, in
 }
 
 /* Stitch code and colour index of cell (k from the bottom, c), both periodic. */
-KNIT_FN int knit_cell_index(KnitGeom g, int k, int c) {
+KNIT_FN int knit_cell_index(KNIT_IN(KnitGeom) g, int k, int c) {
   int pr = g.rows - 1 - k_modi(k, g.rows); /* pattern rows are written top first */
   return pr * g.cols + k_modi(c, g.cols);
 }
-KNIT_FN int knit_cell_code(KnitGeom g, KNIT_ARRAY(int, codes), int k, int c) {
+KNIT_FN int knit_cell_code(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), int k, int c) {
   return codes[knit_cell_index(g, k, c)];
 }
 KNIT_FN int knit_column_of(float t) { return KINT(k_floor(t / K_2PI)); }
-KNIT_FN float knit_row_centre_y(KnitGeom g, int k) { return (KFLT(k) + KF(0.5)) * g.row_spacing; }
+KNIT_FN float knit_row_centre_y(KNIT_IN(KnitGeom) g, int k) { return (KFLT(k) + KF(0.5)) * g.row_spacing; }
 
 /* A row with its pattern-row offsets precomputed (and those of the rows
  * above and below, for the depth signs): evaluations along one row then need
@@ -106,7 +106,7 @@ KNIT_STRUCT(KRow)
   float yk;               /* centre y of the row */
 KNIT_STRUCT_END(KRow)
 
-KNIT_FN KRow knit_row(KnitGeom g, int k) {
+KNIT_FN KRow knit_row(KNIT_IN(KnitGeom) g, int k) {
   KRow rw;
   rw.k = k;
   rw.off = (g.rows - 1 - k_modi(k, g.rows)) * g.cols;
@@ -130,7 +130,7 @@ KNIT_STRUCT_END(KCurve)
 /* Depth signs (head, legs, sinker) of cell (k, c), see the file header. */
 KNIT_FN float knit_code_sign(int code) { return code == KNIT_CODE_PURL ? KF(-1.0) : KF(1.0); }
 KNIT_FN int knit_code_is_loop(int code) { return code == KNIT_CODE_KNIT || code == KNIT_CODE_PURL; }
-KNIT_FN KCell knit_cell(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, int c) {
+KNIT_FN KCell knit_cell(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, int c) {
   KCell cl;
   int cm = k_modi(c, g.cols);
   int above = codes[rw.off_up + cm];
@@ -153,7 +153,7 @@ KNIT_FN kvec3 knit_depth_poly(kvec3 sg, float c) {
 }
 
 /* profile(code, tau) of a cell with depth signs sg, placed at the cell centre (tc, yk). */
-KNIT_FN KCurve knit_profile(KnitGeom g, int code, kvec3 sg, float tau, float tc, float yk) {
+KNIT_FN KCurve knit_profile(KNIT_IN(KnitGeom) g, int code, kvec3 sg, float tau, float tc, float yk) {
   KCurve cv;
   if (knit_code_is_loop(code)) {
     float s1 = k_sin(tau), c1 = k_cos(tau);
@@ -184,13 +184,13 @@ KNIT_FN kvec3 knit_blend_weight(float t, float tb) {
 }
 
 /* Whether two cells have the same profile (then no blend is needed). */
-KNIT_FN int knit_same_profile(KCell a, KCell b) {
+KNIT_FN int knit_same_profile(KNIT_IN(KCell) a, KNIT_IN(KCell) b) {
   if (knit_code_is_loop(a.code) == 0 || knit_code_is_loop(b.code) == 0) return a.code == b.code;
   return KX(a.sg) == KX(b.sg) && KY(a.sg) == KY(b.sg) && KZ(a.sg) == KZ(b.sg);
 }
 
 /* The exact yarn curve of a row at global parameter t (see the file header). */
-KNIT_FN KCurve knit_row_curve_at(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, float t) {
+KNIT_FN KCurve knit_row_curve_at(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, float t) {
   int c = knit_column_of(t);
   float tc = K_2PI * KFLT(c) + K_PI;
   float tau = t - tc;
@@ -231,13 +231,13 @@ KNIT_FN KCurve knit_row_curve_at(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, fl
   }
 }
 
-KNIT_FN KCurve knit_row_curve(KnitGeom g, KNIT_ARRAY(int, codes), int k, float t) {
+KNIT_FN KCurve knit_row_curve(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), int k, float t) {
   return knit_row_curve_at(g, codes, knit_row(g, k), t);
 }
 
 /* cos(m pi / 8) and sin(m pi / 8) for any integer m, without libm. */
 KNIT_FN float knit_cos_pi8(int m) {
-  int q = k_modi(m, 16);
+  int q = m & 15;                 /* m mod 16, also for negative m */
   int r = q > 8 ? 16 - q : q;     /* cos is even: fold to 0..8 */
   float sgn = r > 4 ? KF(-1.0) : KF(1.0);
   int e = r > 4 ? 8 - r : r;      /* cos(pi - x) = -cos x: fold to 0..4 */
@@ -251,7 +251,7 @@ KNIT_FN float knit_cos_pi8(int m) {
 KNIT_FN float knit_sin_pi8(int m) { return knit_cos_pi8(m - 4); }
 
 /* Position on the unblended profile at tau = m pi/8 - pi (node m of a cell). */
-KNIT_FN kvec3 knit_profile_node(KnitGeom g, int code, kvec3 sg, int m, float tc, float yk) {
+KNIT_FN kvec3 knit_profile_node(KNIT_IN(KnitGeom) g, int code, kvec3 sg, int m, float tc, float yk) {
   float tau = KFLT(m) * (K_PI / KF(8.0)) - K_PI;
   if (knit_code_is_loop(code)) {
     /* tau = m pi/8 - pi: cos tau = -cos(m pi/8); 2 tau = m pi/4 - 2 pi */
@@ -266,7 +266,7 @@ KNIT_STRUCT(KBox)
   kvec3 lo, hi;
 KNIT_STRUCT_END(KBox)
 
-KNIT_FN KBox kbox_grow(KBox b, float m) {
+KNIT_FN KBox kbox_grow(KNIT_IN(KBox) b, float m) {
   KBox o;
   o.lo = kv3(KX(b.lo) - m, KY(b.lo) - m, KZ(b.lo) - m);
   o.hi = kv3(KX(b.hi) + m, KY(b.hi) + m, KZ(b.hi) + m);
@@ -278,7 +278,7 @@ KNIT_FN KBox kbox_grow(KBox b, float m) {
  * bounds come from the ends (x as [tau0, tau1] + a [min, max] sin 2tau); the
  * depth cubic P(c) is bounded by its values at the ends and at its
  * stationary points inside. */
-KNIT_FN KBox knit_profile_piece_bounds(KnitGeom g, int code, kvec3 sg, int j, float tc, float yk) {
+KNIT_FN KBox knit_profile_piece_bounds(KNIT_IN(KnitGeom) g, int code, kvec3 sg, int j, float tc, float yk) {
   KBox b;
   float t0 = KFLT(j) * K_PI_4 - K_PI, t1 = t0 + K_PI_4;
   if (knit_code_is_loop(code)) {
@@ -314,7 +314,7 @@ KNIT_FN KBox knit_profile_piece_bounds(KnitGeom g, int code, kvec3 sg, int j, fl
  * looking at the pattern: x and y of knit and purl profiles do not depend on
  * the code (nor on a blend between them); slip-stitch floats lie on
  * y = y_k - h, x = t. z is bounded by the depth of the deepest profile. */
-KNIT_FN KBox knit_piece_bounds_xy(KnitGeom g, float yk, int gp) {
+KNIT_FN KBox knit_piece_bounds_xy(KNIT_IN(KnitGeom) g, float yk, int gp) {
   KBox b;
   int j = gp & 7;
   int q = j & 3;
@@ -342,7 +342,7 @@ KNIT_FN int knit_piece_neighbour(int j) { return j == 0 ? -1 : (j == 7 ? 1 : 0);
 
 /* Conservative bounds of the exact curve of row k over global piece gp. A
  * blended piece lies in the union of both profiles' boxes (convex weights). */
-KNIT_FN KBox knit_piece_bounds(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, int gp) {
+KNIT_FN KBox knit_piece_bounds(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, int gp) {
   int c = KINT(k_floor(KFLT(gp) / KF(8.0)));
   int j = gp - 8 * c;
   float tc = K_2PI * KFLT(c) + K_PI, yk = rw.yk;
@@ -380,7 +380,7 @@ KNIT_FN KQuad knit_quad_from_nodes(kvec3 f0, kvec3 f1, kvec3 f2, float t0) {
   return q;
 }
 
-KNIT_FN KQuad knit_piece_quad(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, int gp) {
+KNIT_FN KQuad knit_piece_quad(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, int gp) {
   int c = KINT(k_floor(KFLT(gp) / KF(8.0)));
   int j = gp - 8 * c;
   float t0 = KFLT(gp) * K_PI_4;
@@ -401,7 +401,7 @@ KNIT_FN KQuad knit_piece_quad(KnitGeom g, KNIT_ARRAY(int, codes), KRow rw, int g
   }
 }
 
-KNIT_FN kvec3 knit_quad_eval(KQuad q, float x) {
+KNIT_FN kvec3 knit_quad_eval(KNIT_IN(KQuad) q, float x) {
   return kv3_add(q.q0, kv3_scale(kv3_add(q.q1, kv3_scale(q.q2, x)), x));
 }
 

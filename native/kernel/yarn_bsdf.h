@@ -78,9 +78,9 @@ KNIT_STRUCT(KYarnLobeProbs)
   float p3; /* body transmission */
 KNIT_STRUCT_END(KYarnLobeProbs)
 
-KNIT_FN KYarnBsdf yarn_bsdf_make(KMicrofacet spec_r, KMicrofacet spec_t, kvec3 kd_r, kvec3 kd_t,
+KNIT_FN KYarnBsdf yarn_bsdf_make(KNIT_IN(KMicrofacet) spec_r, KNIT_IN(KMicrofacet) spec_t, kvec3 kd_r, kvec3 kd_t,
                                  float body_energy, float body_reflect, float shadow,
-                                 KAttenuation atten) {
+                                 KNIT_IN(KAttenuation) atten) {
   KYarnBsdf p;
   p.spec_r = spec_r;
   p.spec_t = spec_t;
@@ -96,7 +96,7 @@ KNIT_FN KYarnBsdf yarn_bsdf_make(KMicrofacet spec_r, KMicrofacet spec_t, kvec3 k
 /* Lobe selection probabilities for wo: proportional to estimated albedos
  * (Fresnel at the macro normal, LS albedo, straight-through tau), with a
  * floor for every lobe that can be non-zero. All zero when the BSDF is. */
-KNIT_FN KYarnLobeProbs yarn_bsdf_lobe_probs(KYarnBsdf p, kvec3 wo) {
+KNIT_FN KYarnLobeProbs yarn_bsdf_lobe_probs(KNIT_IN(KYarnBsdf) p, kvec3 wo) {
   KYarnLobeProbs q;
   float mo = k_fabs(KZ(wo));
   float fo = kb_fresnel_dielectric(mo, p.spec_r.eta);
@@ -120,7 +120,7 @@ KNIT_FN KYarnLobeProbs yarn_bsdf_lobe_probs(KYarnBsdf p, kvec3 wo) {
 }
 
 /* One lobe's contribution (index YB_LOBE_*), weights included; eval is their sum. */
-KNIT_FN kvec3 yarn_bsdf_lobe_eval(KYarnBsdf p, int lobe, kvec3 wo, kvec3 wi) {
+KNIT_FN kvec3 yarn_bsdf_lobe_eval(KNIT_IN(KYarnBsdf) p, int lobe, kvec3 wo, kvec3 wi) {
   float b = p.body_energy;
   float r = p.body_reflect;
   float body;
@@ -138,7 +138,7 @@ KNIT_FN kvec3 yarn_bsdf_lobe_eval(KYarnBsdf p, int lobe, kvec3 wo, kvec3 wi) {
   return KB_BLACK;
 }
 
-KNIT_FN kvec3 yarn_bsdf_eval(KYarnBsdf p, kvec3 wo, kvec3 wi) {
+KNIT_FN kvec3 yarn_bsdf_eval(KNIT_IN(KYarnBsdf) p, kvec3 wo, kvec3 wi) {
   float b = p.body_energy;
   float r = p.body_reflect;
   float body, tau;
@@ -155,7 +155,7 @@ KNIT_FN kvec3 yarn_bsdf_eval(KYarnBsdf p, kvec3 wo, kvec3 wi) {
                    tau);
 }
 
-KNIT_FN float yarn_bsdf_pdf_with(KYarnBsdf p, KYarnLobeProbs q, kvec3 wo, kvec3 wi) {
+KNIT_FN float yarn_bsdf_pdf_with(KNIT_IN(KYarnBsdf) p, KNIT_IN(KYarnLobeProbs) q, kvec3 wo, kvec3 wi) {
   if (KZ(wo) * KZ(wi) > KF(0.0)) {
     return q.p0 * bsdf_mf_reflect_pdf(p.spec_r, wo, wi) +
            q.p2 * bsdf_ls_pdf(bsdf_ls_make(p.kd_r), wo, wi);
@@ -167,17 +167,17 @@ KNIT_FN float yarn_bsdf_pdf_with(KYarnBsdf p, KYarnLobeProbs q, kvec3 wo, kvec3 
   return KF(0.0);
 }
 
-KNIT_FN float yarn_bsdf_pdf(KYarnBsdf p, kvec3 wo, kvec3 wi) {
+KNIT_FN float yarn_bsdf_pdf(KNIT_IN(KYarnBsdf) p, kvec3 wo, kvec3 wi) {
   return yarn_bsdf_pdf_with(p, yarn_bsdf_lobe_probs(p, wo), wo, wi);
 }
 
-KNIT_FN float yarn_bsdf_lobe_prob(KYarnLobeProbs q, int lobe) {
+KNIT_FN float yarn_bsdf_lobe_prob(KNIT_IN(KYarnLobeProbs) q, int lobe) {
   return lobe == 0 ? q.p0 : (lobe == 1 ? q.p1 : (lobe == 2 ? q.p2 : q.p3));
 }
 
 /* Chooses a lobe with u1 (rescaled and reused), samples it with (u1', u2),
  * and returns wi with weight = eval / pdf and the mixture pdf. */
-KNIT_FN KBsdfSample yarn_bsdf_sample(KYarnBsdf p, kvec3 wo, float u1, float u2) {
+KNIT_FN KBsdfSample yarn_bsdf_sample(KNIT_IN(KYarnBsdf) p, kvec3 wo, float u1, float u2) {
   KYarnLobeProbs q = yarn_bsdf_lobe_probs(p, wo);
   float c1 = q.p0;
   float c2 = c1 + q.p1;
@@ -211,7 +211,7 @@ KNIT_FN KBsdfSample yarn_bsdf_sample(KYarnBsdf p, kvec3 wo, float u1, float u2) 
 /* ---- With delta transmission through gaps (bsdf_delta.h) ------------------ */
 
 /* u0 chooses pass-through (probability p_delta) or the yarn BSDF (u1, u2). */
-KNIT_FN KBsdfSample yarn_bsdf_sample_gaps(KYarnBsdf p, float p_delta, kvec3 wo, float u0, float u1,
+KNIT_FN KBsdfSample yarn_bsdf_sample_gaps(KNIT_IN(KYarnBsdf) p, float p_delta, kvec3 wo, float u0, float u1,
                                           float u2) {
   KDeltaChoice c = bsdf_delta_choose(p_delta, u0);
   KBsdfSample s;
@@ -222,12 +222,12 @@ KNIT_FN KBsdfSample yarn_bsdf_sample_gaps(KYarnBsdf p, float p_delta, kvec3 wo, 
 }
 
 /* The non-delta part (what light sampling sees): (1 - p_delta) f * |wi.z|. */
-KNIT_FN kvec3 yarn_bsdf_eval_gaps(KYarnBsdf p, float p_delta, kvec3 wo, kvec3 wi) {
+KNIT_FN kvec3 yarn_bsdf_eval_gaps(KNIT_IN(KYarnBsdf) p, float p_delta, kvec3 wo, kvec3 wi) {
   return kv3_scale(yarn_bsdf_eval(p, wo, wi), bsdf_delta_scale(p_delta));
 }
 
 /* Solid-angle pdf of the non-delta part: (1 - p_delta) pdf. */
-KNIT_FN float yarn_bsdf_pdf_gaps(KYarnBsdf p, float p_delta, kvec3 wo, kvec3 wi) {
+KNIT_FN float yarn_bsdf_pdf_gaps(KNIT_IN(KYarnBsdf) p, float p_delta, kvec3 wo, kvec3 wi) {
   return yarn_bsdf_pdf(p, wo, wi) * bsdf_delta_scale(p_delta);
 }
 

@@ -94,4 +94,24 @@ TEST(Cubic, TripleAndDoubleRoots) {
   for (float x : d) EXPECT_LT(rel_residual(1, -4, 5, -2, x), 1e-5);
 }
 
+// The host's cube root (bit-level guess and Newton steps) against double
+// precision over the whole float range, and its special values.
+TEST(Cubic, HostCubeRootIsAccurate) {
+  double worst = 0;
+  for (double e = -37; e <= 38; e += 0.01) {
+    for (double sgn : {1.0, -1.0}) {
+      const float x = float(sgn * std::pow(10.0, e));
+      const double ref = std::cbrt(double(x));
+      const float y = knit::k::knit_host_cbrt(x);
+      ASSERT_TRUE(std::isfinite(y)) << "x = " << x;
+      worst = std::max(worst, std::abs(double(y) - ref) / std::abs(ref));
+    }
+  }
+  EXPECT_LT(worst, 4e-7) << "max relative error of knit_host_cbrt";
+  EXPECT_EQ(knit::k::knit_host_cbrt(0.f), 0.f);
+  EXPECT_EQ(knit::k::knit_host_cbrt(-8.f), -2.f);
+  EXPECT_TRUE(std::isinf(knit::k::knit_host_cbrt(INFINITY)));
+  EXPECT_TRUE(std::isnan(knit::k::knit_host_cbrt(NAN)));
+}
+
 }  // namespace

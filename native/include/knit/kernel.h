@@ -3,7 +3,8 @@
 // includes this, never the kernel headers directly.
 #pragma once
 
-#include <math.h>  // before the namespace: host_c.h's own include is then a no-op
+#include <math.h>  // before the namespace: host_c.h's own includes are then no-ops
+#include <string.h>
 
 namespace knit::k {
 #include "host_c.h"
