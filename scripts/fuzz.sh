@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
-# Fuzzes the pattern parser with libFuzzer (docs/patterns.md, "Fuzzing").
+# Fuzzes the pattern parser or the scene parser with libFuzzer
+# (docs/patterns.md and docs/scene-format.md, "Fuzzing").
 #
-#   scripts/fuzz.sh [SECONDS] [BUILD_DIR]     default 600 s, build-fuzz
+#   scripts/fuzz.sh [SECONDS] [BUILD_DIR] [TARGET]   default 600 s, build-fuzz, pattern
 #
-# Configures a separate clang build with -DKNIT_FUZZ=ON, runs `fuzz_pattern`
-# for SECONDS on a scratch copy of tests/fuzz/corpus/pattern, then merges the
-# inputs that add coverage back into that corpus (-merge=1). Crashes land in
+# TARGET is `pattern` or `scene`. Configures a separate clang build with
+# -DKNIT_FUZZ=ON, runs `fuzz_TARGET` for SECONDS on a scratch copy of
+# tests/fuzz/corpus/TARGET, then merges the inputs that add coverage back
+# into that corpus (-merge=1). Crashes land in
 # tests/fuzz/crash-* (git-ignored). FUZZ_JOBS=N runs N fuzzer processes.
 # FUZZ_MAX_LEN (default 9000 bytes: enough for 4097 cells or 4097 rows, so
 # the limits are reachable) caps the input size.
@@ -15,21 +17,27 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds="${1:-600}"
 build="${2:-build-fuzz}"
+target="${3:-pattern}"
+case "$target" in
+  pattern) renderer=OFF ;;
+  scene) renderer=ON ;;
+  *) echo "scripts/fuzz.sh: unknown target '$target' (pattern or scene)" >&2; exit 2 ;;
+esac
 jobs="${FUZZ_JOBS:-1}"
 max_len="${FUZZ_MAX_LEN:-9000}"
-corpus=tests/fuzz/corpus/pattern
+corpus=tests/fuzz/corpus/$target
 
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DKNIT_FUZZ=ON \
-  -DKNIT_BUILD_PYTHON=OFF -DKNIT_BUILD_BENCH=OFF -DKNIT_BUILD_RENDERER=OFF >/dev/null
-cmake --build "$build" --target fuzz_pattern
-fuzzer="$build/tests/fuzz/fuzz_pattern"
+  -DKNIT_BUILD_PYTHON=OFF -DKNIT_BUILD_BENCH=OFF -DKNIT_BUILD_RENDERER=$renderer >/dev/null
+cmake --build "$build" --target "fuzz_$target"
+fuzzer="$build/tests/fuzz/fuzz_$target"
 
 scratch="$build/fuzz-scratch"
 rm -rf "$scratch"
 mkdir -p "$scratch"
 echo "fuzzing for ${seconds}s with ${jobs} job(s); corpus $corpus ($(ls "$corpus" | wc -l) files)"
-run_args=(-max_total_time="$seconds" -dict=tests/fuzz/pattern.dict -max_len="$max_len" -timeout=10
+run_args=(-max_total_time="$seconds" -dict="tests/fuzz/$target.dict" -max_len="$max_len" -timeout=10
           -rss_limit_mb=4096 -artifact_prefix=tests/fuzz/ -print_final_stats=1)
 if [ "$jobs" -gt 1 ]; then
   run_args+=(-fork="$jobs")

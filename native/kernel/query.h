@@ -26,6 +26,10 @@
 
 #define KNIT_NEWTON_CLOSEST 1  /* Newton steps on the distance before the extremes */
 #define KNIT_NEWTON_EXTREME 3  /* Newton steps for each of entry and exit */
+/* Largest |x|, |y| a line query looks at: beyond it the row and piece
+ * indices would overflow an int, so the query reports a miss (the hosts
+ * reject far smaller coordinates, see kMaxPatternCoord in knit/surface.h). */
+#define KNIT_MAX_COORD KF(1.0e7)
 
 /* Result of a line query: the first tube entry with s in [s_min, s_max]. */
 KNIT_STRUCT(KnitLineHit)
@@ -246,8 +250,15 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
   kvec3 pa = kv3_madd(o, D, s_min), pb = kv3_madd(o, D, s_max);
   float rr = g.r * KF(1.001) + KF(1.0e-4);
   float m = g.r + g.quad_margin;
-  float xmin = k_fmin(KX(pa), KX(pb)), xmax = k_fmax(KX(pa), KX(pb));
-  float ymin = k_fmin(KY(pa), KY(pb)), ymax = k_fmax(KY(pa), KY(pb));
+  /* Clamped (NaN included) so that the index conversions below stay defined;
+   * a segment reaching beyond KNIT_MAX_COORD returns a miss. */
+  float xmin = k_clampf(k_fmin(KX(pa), KX(pb)), -KNIT_MAX_COORD, KNIT_MAX_COORD);
+  float xmax = k_clampf(k_fmax(KX(pa), KX(pb)), -KNIT_MAX_COORD, KNIT_MAX_COORD);
+  float ymin = k_clampf(k_fmin(KY(pa), KY(pb)), -KNIT_MAX_COORD, KNIT_MAX_COORD);
+  float ymax = k_clampf(k_fmax(KY(pa), KY(pb)), -KNIT_MAX_COORD, KNIT_MAX_COORD);
+  int inside = k_fabs(KX(pa)) < KNIT_MAX_COORD && k_fabs(KX(pb)) < KNIT_MAX_COORD &&
+                       k_fabs(KY(pa)) < KNIT_MAX_COORD && k_fabs(KY(pb)) < KNIT_MAX_COORD
+                   ? 1 : 0;
   int k0 = KINT(k_ceil((ymin - g.h - rr) / g.row_spacing - KF(0.5)));
   int k1 = KINT(k_floor((ymax + g.h + rr) / g.row_spacing - KF(0.5)));
   float xa = g.has_floats != 0 ? k_fmax(g.a, KF(0.0)) : g.a;
@@ -255,6 +266,7 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
   int g1 = KINT(k_floor((xmax + rr + xa) / KNIT_PIECE_LEN));
   int count = 0;
   int k, gp;
+  if (inside == 0) return best;
   /* The segment's bounding box; for a segment along a coordinate axis (the
    * vertical query) box overlap is the exact slab test. */
   kvec3 seg_lo = kv3(xmin, ymin, k_fmin(KZ(pa), KZ(pb)));

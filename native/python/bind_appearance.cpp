@@ -660,6 +660,10 @@ HitArgs hit_args(const KnitMaterial& m, ::py::handle u, ::py::handle v, ::py::ha
   a.v = column(v, "v");
   check_finite_column(a.u);
   check_finite_column(a.v);
+  // Pattern space is single precision: |uv_scale * u| <= kMaxPatternCoord.
+  const double uv_lim = double(kMaxPatternCoord) / double(a.uv_scale);
+  check_range_column(a.u, -uv_lim, uv_lim, false);
+  check_range_column(a.v, -uv_lim, uv_lim, false);
   a.ray = rows(ray_dir, "ray_dir", 3);
   check_unit_rows(a.ray);
   Broadcast bc;

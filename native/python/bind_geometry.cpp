@@ -43,7 +43,18 @@ struct Points {
   bool su, sv;
 };
 
-Points points(const Arr& u, const Arr& v) {
+// |uv_scale * u| and |uv_scale * v| must stay within kMaxPatternCoord.
+void check_pattern_range(const char* what, const double* p, ssize_t n, double uv_scale) {
+  for (ssize_t i = 0; i < n; ++i)
+    if (!(std::abs(uv_scale * p[i]) <= double(kMaxPatternCoord)))
+      throw ::py::value_error(std::string(what) + "[" + std::to_string(i) + "] = " + num(p[i]) +
+                              " maps to pattern coordinate " + num(uv_scale * p[i]) + " (uv_scale " +
+                              num(uv_scale) + "), beyond the +-" + num(kMaxPatternCoord) +
+                              " that single-precision pattern space resolves; wrap it by the pattern "
+                              "period first");
+}
+
+Points points(const Arr& u, const Arr& v, double uv_scale) {
   if (u.ndim() > 1 || v.ndim() > 1) throw ::py::value_error("u and v must be scalars or 1-D arrays");
   const ssize_t nu = u.size(), nv = v.size();
   if (nu != nv && nu != 1 && nv != 1)
@@ -51,6 +62,8 @@ Points points(const Arr& u, const Arr& v) {
                             std::to_string(nv));
   check_finite("u", u.data(), nu);
   check_finite("v", v.data(), nv);
+  check_pattern_range("u", u.data(), nu, uv_scale);
+  check_pattern_range("v", v.data(), nv, uv_scale);
   return {u, v, std::max(nu, nv), u.data(), v.data(), nu == 1, nv == 1};
 }
 
@@ -106,7 +119,7 @@ class PyKnitSurface {
   }
 
   ::py::dict query(const Arr& u, const Arr& v) const {
-    Points P = points(u, v);
+    Points P = points(u, v, uv_scale_);
     HitArrays out(P.n);
     ::py::array_t<double> z(P.n);
     {
@@ -126,6 +139,8 @@ class PyKnitSurface {
   ::py::list crossings(double u, double v) const {
     if (!std::isfinite(u) || !std::isfinite(v))
       throw ::py::value_error("u and v must be finite, got " + num(u) + ", " + num(v));
+    check_pattern_range("u", &u, 1, uv_scale_);
+    check_pattern_range("v", &v, 1, uv_scale_);
     const float x = float(uv_scale_ * u), y = float(uv_scale_ * v);
     const float top = surf_.shell_top() + 0.01f;
     ::py::list out;
@@ -148,7 +163,7 @@ class PyKnitSurface {
 
   ::py::dict capm(const Arr& u, const Arr& v, const Arr& wi, const FrameProvider* frame, int max_steps,
                   double max_segment, double max_bend) const {
-    Points P = points(u, v);
+    Points P = points(u, v, uv_scale_);
     if (!(wi.ndim() == 1 && wi.shape(0) == 3) && !(wi.ndim() == 2 && wi.shape(1) == 3))
       throw ::py::value_error("wi_local must have shape (3,) or (N, 3)");
     const ssize_t nw = wi.ndim() == 1 ? 1 : wi.shape(0);
@@ -193,7 +208,7 @@ class PyKnitSurface {
   ::py::dict aggregate(const Arr& u, const Arr& v, const Arr& fx, const Arr& fy, const Arr& wi, int n_points,
                        double shift_x, double shift_y, double kx, double ky, double max_segment,
                        int max_steps) const {
-    Points P = points(u, v);
+    Points P = points(u, v, uv_scale_);
     auto vec2 = [](const Arr& a, const char* name) {
       if (a.ndim() != 1 || a.shape(0) != 2) throw ::py::value_error(std::string(name) + " must have shape (2,)");
       check_finite(name, a.data(), 2);

@@ -66,6 +66,18 @@ KnitModelMaterial::KnitModelMaterial(const KnitDesc& desc, std::shared_ptr<const
   if (tables_.with_uv_area == 0)
     throw SceneError(scene_file, object_path + ".mesh",
                      mesh_->file + ": no triangle has a non-zero UV area, which the knit material needs");
+  // Pattern space is single precision (knit::kMaxPatternCoord).
+  for (size_t i = 0; i < mesh_->uvs.size(); ++i) {
+    const Vec2 uv = mesh_->uvs[i];
+    const double x = double(uv.x) * uv_scale, y = double(uv.y) * uv_scale;
+    if (!(std::fabs(x) <= knit::kMaxPatternCoord && std::fabs(y) <= knit::kMaxPatternCoord))
+      throw SceneError(scene_file, object_path + ".mesh",
+                       mesh_->file + ": vertex " + std::to_string(i) + " has UV (" + fmt_num(uv.x) + ", " +
+                           fmt_num(uv.y) + "), which " + material_path + " (uv_scale " + fmt_num(uv_scale) +
+                           ") maps to pattern coordinates beyond +-" + fmt_num(knit::kMaxPatternCoord) +
+                           ", where single-precision pattern space no longer resolves the yarns: lower "
+                           "uv_scale or bring the UVs nearer 0");
+  }
   if (model_->params().mode == knit::KnitMode::MultiScale) {
     knit::KnitMaterialParams p = model_->params();
     p.mode = knit::KnitMode::NearField;

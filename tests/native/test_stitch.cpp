@@ -136,6 +136,25 @@ TEST(Stitch, ShellTopBoundsEveryTube) {
   }
 }
 
+// The kernel's line query reports a miss, in bounded work, for points beyond
+// KNIT_MAX_COORD and for non-finite ones (the hosts reject both earlier); a
+// point of the same stitch one period nearer the origin is still a hit.
+TEST(Stitch, LineQueryMissesBeyondItsCoordinateRange) {
+  KnitSurface s = make(test::stockinette());
+  const float x = 3.0f, y = 0.4f * float(s.geom().row_spacing);
+  ASSERT_TRUE(s.query(x, y).hit);
+  const float period = 2.0f * float(kPi);
+  EXPECT_TRUE(s.query(x + 1000 * period, y).hit);
+  for (float far : {2e7f, -2e7f, 3e9f, -3e9f, 1e30f, INFINITY, -INFINITY, NAN}) {
+    EXPECT_FALSE(s.query(far, y).hit) << "x = " << far;
+    EXPECT_FALSE(s.query(x, far).hit) << "y = " << far;
+    const k::KnitLineHit h = k::knit_line_query(s.geom(), s.codes(), s.colors(), k::kv3(x, y, 3.0f),
+                                                k::kv3_normalize(k::kv3(1.0f, 0.5f, -1.0f)), 0.0f, far, 0);
+    EXPECT_EQ(h.hit, 0) << "s_max = " << far;
+    EXPECT_EQ(h.crossings, 0) << "s_max = " << far;
+  }
+}
+
 TEST(Stitch, ParamsValidationNamesTheFieldAndValue) {
   auto msg = [](StitchParams p) {
     try {

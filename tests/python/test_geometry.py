@@ -120,6 +120,29 @@ class QueryTest(unittest.TestCase):
             self.surf.query(np.zeros(3), np.zeros(4))
         with self.assertRaises(ValueError):
             knitshade.KnitSurface(seed_pattern(), self.params, uv_scale=0.0)
+        # Beyond +-32768 pattern units single precision no longer resolves the
+        # yarns: rejected, naming the value, for every entry point.
+        with self.assertRaises(ValueError) as cm:
+            self.surf.query(np.array([1.0, 1e8]), np.array([1.0, 2.0]))
+        self.assertIn("u[1] = 1e+08 maps to pattern coordinate", str(cm.exception))
+        with self.assertRaises(ValueError):
+            self.surf.crossings(1.0, -4e4)
+        with self.assertRaises(ValueError):
+            self.surf.capm(np.array([5e4]), np.array([1.0]), np.array([0.0, 0.0, 1.0]))
+        far = knitshade.KnitSurface(seed_pattern(), self.params, uv_scale=100.0)
+        with self.assertRaises(ValueError) as cm:
+            far.query(400.0, 1.0)
+        self.assertIn("(uv_scale 100)", str(cm.exception))
+        # Just inside the limit the answer still matches the same point one
+        # whole number of pattern periods nearer the origin.
+        period_u = seed_pattern().cols * 2 * math.pi / 100.0
+        u_far = 300.0 + 0.013 * np.arange(40)
+        u_near = u_far - round(300.0 / period_u) * period_u
+        a, b = far.query(u_far, 1.0), far.query(u_near, 1.0)
+        np.testing.assert_array_equal(a["hit"], b["hit"])
+        both = a["hit"] & b["hit"]
+        self.assertGreater(int(both.sum()), 20)
+        self.assertLess(float(np.max(np.abs(a["z"][both] - b["z"][both]))), 0.02)
 
 
 class CapmTest(unittest.TestCase):

@@ -417,6 +417,16 @@ TEST(SceneBuild, KnitNeedsUvs) {
     EXPECT_NE(msg.find("scene.json: objects[0].mesh:"), std::string::npos) << msg;
     EXPECT_NE(msg.find("no triangle has a non-zero UV area"), std::string::npos) << msg;
   }
+  // UVs that the material maps beyond single-precision pattern space.
+  test::write_file(dir, "far_uv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1e9 1\nf 1/1 2/2 3/3\n");
+  {
+    const std::string msg =
+        scene_error_of([&] { Scene s(parse_scene(with_mesh(j, "far_uv.obj"), "scene.json", dir), BuildOptions{}, w); });
+    EXPECT_NE(msg.find("scene.json: objects[0].mesh: " + dir + "/far_uv.obj: vertex 2 has UV (1e+09, 1)"),
+              std::string::npos)
+        << msg;
+    EXPECT_NE(msg.find("beyond +-32768"), std::string::npos) << msg;
+  }
   // A diffuse material is fine without UVs.
   j["objects"][0]["material"] = "red";
   EXPECT_NO_THROW(Scene(parse_scene(with_mesh(j, "no_uv.obj"), "scene.json", dir), BuildOptions{}, w));

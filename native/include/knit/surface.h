@@ -69,6 +69,15 @@ class SphereFrame final : public FrameProvider {
   float radius_;
 };
 
+// Largest |x| or |y| of a pattern-space point the hosts accept (Python,
+// renderer): pattern space is single-precision, and at 2^15 = 32768 units
+// (about 5,200 stitches from the origin) a float is 0.004 apart, 0.6% of the
+// default tube radius. Beyond it positions and normals degrade; the hosts
+// reject such inputs rather than return them quietly wrong. The kernel's own
+// line query returns a miss beyond KNIT_MAX_COORD (1e7), where its row and
+// piece indices would no longer fit an int.
+inline constexpr float kMaxPatternCoord = 32768.0f;
+
 struct CapmOptions {
   int max_steps = 32;           // hard cap on marched segments
   float max_segment = 6.2832f;  // longest segment, pattern units of horizontal travel
