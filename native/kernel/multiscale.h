@@ -40,6 +40,7 @@
 #define KNIT_KERNEL_MULTISCALE_H
 
 #define KNIT_MS_MAX_POINTS 64
+#define KNIT_MS_MAX_CELLS KF(1.0e5) /* footprint extent cap per axis, in cells */
 #define KNIT_MS_COLORS 8
 #define KNIT_MS_MAX_SLOPE KF(4.0)
 
@@ -95,8 +96,10 @@ KNIT_FN KFootprint knit_footprint(KNIT_IN(KnitGeom) g, float x, float y, kvec3 f
                                   float shift_x, float shift_y) {
   KFootprint f;
   float cw = K_2PI, ch = g.row_spacing;
-  float ex = (k_fabs(KX(fx)) + k_fabs(KX(fy))) / cw; /* footprint box, in cells */
-  float ey = (k_fabs(KY(fx)) + k_fabs(KY(fy))) / ch;
+  /* Footprint box, in cells; clamped (NaN to 0) so that the cell indices
+   * below fit an int even for the huge footprints of grazing rays. */
+  float ex = k_clampf((k_fabs(KX(fx)) + k_fabs(KX(fy))) / cw, KF(0.0), KNIT_MS_MAX_CELLS);
+  float ey = k_clampf((k_fabs(KY(fx)) + k_fabs(KY(fy))) / ch, KF(0.0), KNIT_MS_MAX_CELLS);
   f.x = x;
   f.y = y;
   f.fx = fx;

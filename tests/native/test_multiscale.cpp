@@ -23,6 +23,22 @@ k::KnitAggregate aggregate(const KnitSurface& s, float x, float y, float size, k
                            n, shift_x, shift_y, 0, 0, 6.2832f, 32);
 }
 
+// Grazing rays have huge ray differentials: the aggregate stays bounded
+// (at most KNIT_MS_MAX_POINTS points, finite outputs) and still averages
+// the fabric (p_delta near the gap fraction of a large footprint).
+TEST(MultiScale, HugeFootprintsStayBounded) {
+  KnitSurface s(stockinette(), StitchParams{});
+  const k::kvec3 wi = k::kv3(0, 0, 1);
+  const float ref = aggregate(s, 3.0f, 2.0f, 400.0f, wi, 64).p_delta;
+  for (float size : {1e6f, 1e12f, 1e30f, INFINITY}) {
+    const k::KnitAggregate a = aggregate(s, 3.0f, 2.0f, size, wi, 16);
+    EXPECT_LE(a.points, KNIT_MS_MAX_POINTS) << size;
+    EXPECT_TRUE(std::isfinite(a.p_delta) && a.p_delta >= 0 && a.p_delta <= 1) << size << ": " << a.p_delta;
+    EXPECT_TRUE(std::isfinite(a.n.x) && std::isfinite(a.n.y) && std::isfinite(a.n.z)) << size;
+    EXPECT_NEAR(a.p_delta, ref, 0.15) << size;
+  }
+}
+
 TEST(MultiScale, SobolPointsFormA02Net) {
   // 16 points: every elementary interval of area 1/16 holds exactly one.
   for (int log_w = 0; log_w <= 4; ++log_w) {
