@@ -100,7 +100,7 @@ KNIT_FN KnitCapm knit_capm_step_len(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
   float lp = kv3_len(dp);
   KnitLineHit h;
   if (st.state != KNIT_CAPM_MARCHING) return st;
-  h = knit_line_query(g, codes, colors, st.p, kv3_scale(dp, KF(1.0) / lp), KF(0.0), len * lp, KNIT_QUERY_ENTRY);
+  h = knit_line_query(g, codes, colors, st.p, kv3_scale(dp, KF(1.0) / lp), KF(0.0), len * lp, KNIT_QUERY_FIRST);
   st.steps = st.steps + 1;
   if (h.hit != 0) {
     st.state = KNIT_CAPM_HIT;

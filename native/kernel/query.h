@@ -61,35 +61,36 @@ KNIT_FN KnitLineHit knit_line_hit_none(KNIT_NOARGS) {
   return h;
 }
 
-/* Segment [pa, pb] against an axis-aligned box (slab test). */
-KNIT_FN int knit_segment_box(kvec3 pa, kvec3 pb, KNIT_IN(KBox) b) {
-  float t0 = KF(0.0), t1 = KF(1.0);
-  kvec3 dv = kv3_sub(pb, pa);
-  float da[3], lo[3], hi[3], pv[3];
-  int i;
-  da[0] = KX(dv); da[1] = KY(dv); da[2] = KZ(dv);
-  lo[0] = KX(b.lo); lo[1] = KY(b.lo); lo[2] = KZ(b.lo);
-  hi[0] = KX(b.hi); hi[1] = KY(b.hi); hi[2] = KZ(b.hi);
-  pv[0] = KX(pa); pv[1] = KY(pa); pv[2] = KZ(pa);
-  for (i = 0; i < 3; i++) {
-    if (k_fabs(da[i]) < KF(1.0e-12)) {
-      if (pv[i] < lo[i] || pv[i] > hi[i]) return 0;
-    } else {
-      float inv = KF(1.0) / da[i];
-      float ta = (lo[i] - pv[i]) * inv, tb = (hi[i] - pv[i]) * inv;
-      t0 = k_fmax(t0, k_fmin(ta, tb));
-      t1 = k_fmin(t1, k_fmax(ta, tb));
-      if (t0 > t1) return 0;
-    }
-  }
-  return 1;
+/* Reciprocal of a segment direction for knit_segment_box_entry: 0 marks an
+ * axis the segment does not move along. */
+KNIT_FN kvec3 knit_segment_inv(kvec3 dv) {
+  return kv3(k_fabs(KX(dv)) < KF(1.0e-12) ? KF(0.0) : KF(1.0) / KX(dv),
+             k_fabs(KY(dv)) < KF(1.0e-12) ? KF(0.0) : KF(1.0) / KY(dv),
+             k_fabs(KZ(dv)) < KF(1.0e-12) ? KF(0.0) : KF(1.0) / KZ(dv));
 }
 
-/* Whether box b grown by m overlaps the box [lo, hi]: the cheap test that
- * rejects most pieces before the slab test. */
-KNIT_FN int knit_box_overlap(KNIT_IN(KBox) b, float m, kvec3 lo, kvec3 hi) {
-  return KX(b.lo) - m <= KX(hi) && KX(b.hi) + m >= KX(lo) && KY(b.lo) - m <= KY(hi) &&
-         KY(b.hi) + m >= KY(lo) && KZ(b.lo) - m <= KZ(hi) && KZ(b.hi) + m >= KZ(lo);
+/* Slab test of the segment pa + u dv, u in [0, 1], against box b grown by m:
+ * the entry parameter u, or -1 when the segment misses the box. inv is
+ * knit_segment_inv(dv). */
+KNIT_FN float knit_segment_box_entry(kvec3 pa, kvec3 inv, KNIT_IN(KBox) b, float m) {
+  float t0 = KF(0.0), t1 = KF(1.0);
+  float iv[3], lo[3], hi[3], pv[3];
+  int i;
+  iv[0] = KX(inv); iv[1] = KY(inv); iv[2] = KZ(inv);
+  lo[0] = KX(b.lo) - m; lo[1] = KY(b.lo) - m; lo[2] = KZ(b.lo) - m;
+  hi[0] = KX(b.hi) + m; hi[1] = KY(b.hi) + m; hi[2] = KZ(b.hi) + m;
+  pv[0] = KX(pa); pv[1] = KY(pa); pv[2] = KZ(pa);
+  for (i = 0; i < 3; i++) {
+    if (iv[i] == KF(0.0)) {
+      if (pv[i] < lo[i] || pv[i] > hi[i]) return KF(-1.0);
+    } else {
+      float ta = (lo[i] - pv[i]) * iv[i], tb = (hi[i] - pv[i]) * iv[i];
+      t0 = k_fmax(t0, k_fmin(ta, tb));
+      t1 = k_fmin(t1, k_fmax(ta, tb));
+      if (t0 > t1) return KF(-1.0);
+    }
+  }
+  return t0;
 }
 
 /* Closest point of a quadratic piece to the line (o, D): u in [0, 1] and the
@@ -237,6 +238,23 @@ KNIT_FN KnitLineHit knit_crossing(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), K
 #define KNIT_QUERY_ENTRY 0  /* first entry and crossing count (s_out not computed) */
 #define KNIT_QUERY_EXIT 1   /* also the exit of the first crossing */
 #define KNIT_QUERY_COUNT 2  /* crossing count only: no entry points (hit stays 0) */
+#define KNIT_QUERY_FIRST 3  /* first entry only (crossings stays 0): the pieces are
+                               visited nearest first and the search stops at the
+                               first piece the line reaches beyond the best entry */
+
+/* Candidate pieces a FIRST query can order; more are processed unordered. */
+#define KNIT_QUERY_MAX_CAND 48
+
+/* Curve parameter of row rw's point closest to the line (o, D) found from
+ * piece gp (quadratic interpolant, cubic, one Newton step on the exact
+ * curve), or K_BIG when the interpolant stays farther than m from the line. */
+KNIT_FN float knit_piece_closest_t(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, int gp,
+                                   kvec3 o, kvec3 D, float m) {
+  KQuad q = knit_piece_quad(g, codes, rw, gp);
+  kvec3 cu = knit_quad_closest(q, o, D);
+  if (KY(cu) > m * m) return K_BIG;
+  return knit_newton_closest(g, codes, rw, o, D, q.t0 + KX(cu) * KNIT_PIECE_LEN, KNIT_NEWTON_CLOSEST);
+}
 
 /* First tube entry along o + s D with s in [s_min, s_max] (D unit), and the
  * number of tube crossings overlapping that range; see KNIT_QUERY_* for
@@ -248,6 +266,7 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
                                     kvec3 o, kvec3 D, float s_min, float s_max, int mode) {
   KnitLineHit best = knit_line_hit_none();
   kvec3 pa = kv3_madd(o, D, s_min), pb = kv3_madd(o, D, s_max);
+  kvec3 inv = knit_segment_inv(kv3_sub(pb, pa));
   float rr = g.r * KF(1.001) + KF(1.0e-4);
   float m = g.r + g.quad_margin;
   /* Clamped (NaN included) so that the index conversions below stay defined;
@@ -265,40 +284,41 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
   int g0 = KINT(k_floor((xmin - rr - xa) / KNIT_PIECE_LEN));
   int g1 = KINT(k_floor((xmax + rr + xa) / KNIT_PIECE_LEN));
   int count = 0;
-  int k, gp;
-  if (inside == 0) return best;
-  /* The segment's bounding box; for a segment along a coordinate axis (the
-   * vertical query) box overlap is the exact slab test. */
-  kvec3 seg_lo = kv3(xmin, ymin, k_fmin(KZ(pa), KZ(pb)));
-  kvec3 seg_hi = kv3(xmax, ymax, k_fmax(KZ(pa), KZ(pb)));
-  int axis = (KX(D) == KF(0.0) && KY(D) == KF(0.0)) || (KX(D) == KF(0.0) && KZ(D) == KF(0.0)) ||
-             (KY(D) == KF(0.0) && KZ(D) == KF(0.0)) ? 1 : 0;
-  /* The exact piece bounds refine only z (and slip-stitch floats): skip them
-   * when the segment spans the whole shell in z. */
-  int skip_exact = axis != 0 && g.has_floats == 0 && KZ(seg_lo) <= -g.shell_top && KZ(seg_hi) >= g.shell_top
+  int k, gp, i, j;
+  /* FIRST: candidates (row, piece, entry distance of their box) */
+  float cand_s[KNIT_QUERY_MAX_CAND];
+  int cand_k[KNIT_QUERY_MAX_CAND], cand_g[KNIT_QUERY_MAX_CAND];
+  int ncand = 0;
+  /* The exact piece bounds refine only z (and slip-stitch floats): skip
+   * them when the segment is vertical and spans the whole shell in z (FIRST
+   * then visits the pieces unordered: their boxes would not order them). */
+  int skip_exact = g.has_floats == 0 && KX(inv) == KF(0.0) && KY(inv) == KF(0.0) &&
+                           k_fmin(KZ(pa), KZ(pb)) <= -g.shell_top && k_fmax(KZ(pa), KZ(pb)) >= g.shell_top
                        ? 1 : 0;
+  if (inside == 0) return best;
   for (k = k0; k <= k1; k++) {
     float last_t = -K_BIG, prev_t = -K_BIG;
     KRow rw = knit_row(g, k);
     for (gp = g0; gp <= g1; gp++) {
-      KQuad q;
-      kvec3 cu;
-      float t;
+      float t, u;
       KnitLineHit h;
       /* Cheap cull first (no pattern lookups), then the exact piece box. */
-      KBox bx = knit_piece_bounds_xy(g, rw.yk, gp);
-      if (knit_box_overlap(bx, rr, seg_lo, seg_hi) == 0) continue;
-      if (axis == 0 && knit_segment_box(pa, pb, kbox_grow(bx, rr)) == 0) continue;
-      if (skip_exact == 0) {
-        bx = knit_piece_bounds(g, codes, rw, gp);
-        if (knit_box_overlap(bx, rr, seg_lo, seg_hi) == 0) continue;
-        if (axis == 0 && knit_segment_box(pa, pb, kbox_grow(bx, rr)) == 0) continue;
+      u = knit_segment_box_entry(pa, inv, knit_piece_bounds_xy(g, rw.yk, gp), rr);
+      if (u < KF(0.0)) continue;
+      if (mode == KNIT_QUERY_FIRST && skip_exact == 0 && ncand < KNIT_QUERY_MAX_CAND) {
+        /* ordered below by this entry (a lower bound of the exact box's) */
+        cand_s[ncand] = s_min + u * (s_max - s_min);
+        cand_k[ncand] = k;
+        cand_g[ncand] = gp;
+        ncand = ncand + 1;
+        continue;
       }
-      q = knit_piece_quad(g, codes, rw, gp);
-      cu = knit_quad_closest(q, o, D);
-      if (KY(cu) > m * m) continue;
-      t = knit_newton_closest(g, codes, rw, o, D, q.t0 + KX(cu) * KNIT_PIECE_LEN,
-                              KNIT_NEWTON_CLOSEST);
+      if (skip_exact == 0) {
+        u = knit_segment_box_entry(pa, inv, knit_piece_bounds(g, codes, rw, gp), rr);
+        if (u < KF(0.0)) continue;
+      }
+      t = knit_piece_closest_t(g, codes, rw, gp, o, D, m);
+      if (t == K_BIG) continue;
       if (k_fabs(t - last_t) < KF(0.1) || k_fabs(t - prev_t) < KF(0.1)) continue;
       if (mode == KNIT_QUERY_COUNT) {
         KCurve cc = knit_row_curve_at(g, codes, rw, t);
@@ -318,7 +338,30 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
       if (h.s_in >= s_min && h.s_in <= s_max && h.s_in < best.s_in) best = h;
     }
   }
-  best.crossings = count;
+  /* FIRST: nearest box first; no later box can hold an entry before the best. */
+  for (j = 0; j < ncand; j++) {
+    int bi = -1;
+    float bs = K_BIG;
+    KnitLineHit h;
+    KRow rw;
+    float t, u;
+    for (i = 0; i < ncand; i++) {
+      if (cand_s[i] < bs) {
+        bs = cand_s[i];
+        bi = i;
+      }
+    }
+    if (bi < 0 || bs > best.s_in) break;
+    cand_s[bi] = K_BIG;
+    rw = knit_row(g, cand_k[bi]);
+    u = knit_segment_box_entry(pa, inv, knit_piece_bounds(g, codes, rw, cand_g[bi]), rr);
+    if (u < KF(0.0) || s_min + u * (s_max - s_min) > best.s_in) continue;
+    t = knit_piece_closest_t(g, codes, rw, cand_g[bi], o, D, m);
+    if (t == K_BIG) continue;
+    h = knit_crossing(g, codes, colors, rw, o, D, t, 0);
+    if (h.hit != 0 && h.s_in >= s_min && h.s_in <= s_max && h.s_in < best.s_in) best = h;
+  }
+  best.crossings = mode == KNIT_QUERY_FIRST ? 0 : count;
   return best;
 }
 

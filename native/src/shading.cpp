@@ -236,7 +236,7 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
   } else {
     const Vec3 o = k::kv3(x, y, sh.from_back ? -top - 0.01f : top + 0.01f);
     h = k::knit_line_query(surface_.geom(), surface_.codes(), surface_.colors(), o,
-                           k::kv3(0, 0, sh.from_back ? 1.0f : -1.0f), 0, 2 * top + 0.02f, KNIT_QUERY_ENTRY);
+                           k::kv3(0, 0, sh.from_back ? 1.0f : -1.0f), 0, 2 * top + 0.02f, KNIT_QUERY_FIRST);
     sh.steps = 1;
     if (!h.hit) {
       sh.point.p_delta = 1;

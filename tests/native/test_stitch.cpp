@@ -155,6 +155,35 @@ TEST(Stitch, LineQueryMissesBeyondItsCoordinateRange) {
   }
 }
 
+// KNIT_QUERY_FIRST visits pieces nearest first and stops early: it must find
+// a hit exactly where the exhaustive query does, also for lines long enough
+// to overflow its candidate list (KNIT_QUERY_MAX_CAND), and its entries may
+// differ only where two Newton solutions of one crossing differ.
+TEST(Stitch, FirstEntryQueryFindsWhatTheFullQueryFinds) {
+  KnitSurface s = make(test::seed());
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> U(0, 1);
+  int hits = 0, close = 0, n = 0;
+  for (float len : {4.0f, 60.0f}) {
+    for (int i = 0; i < 4000; ++i) {
+      const float th = 1.5f * U(rng), ph = 6.2831853f * U(rng);
+      const k::kvec3 o = k::kv3(40 * U(rng), 40 * U(rng), s.shell_top() * (2 * U(rng) - 1));
+      const k::kvec3 D = k::kv3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), -std::cos(th));
+      const k::KnitLineHit a = k::knit_line_query(s.geom(), s.codes(), s.colors(), o, D, 0, len, KNIT_QUERY_ENTRY);
+      const k::KnitLineHit b = k::knit_line_query(s.geom(), s.codes(), s.colors(), o, D, 0, len, KNIT_QUERY_FIRST);
+      ASSERT_EQ(a.hit, b.hit) << "ray " << i << " length " << len;
+      EXPECT_EQ(b.crossings, 0);
+      if (a.hit) {
+        ++hits;
+        close += std::abs(a.s_in - b.s_in) < 1e-3f * s.params().r;
+      }
+      ++n;
+    }
+  }
+  EXPECT_GT(hits, n / 4);
+  EXPECT_GT(close, hits * 95 / 100) << "entries agree on " << close << " of " << hits << " hits";
+}
+
 TEST(Stitch, ParamsValidationNamesTheFieldAndValue) {
   auto msg = [](StitchParams p) {
     try {
