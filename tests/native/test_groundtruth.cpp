@@ -1,7 +1,7 @@
 // The analytic query and CAPM against ray casts of the explicit yarn tubes
 // (double precision, tests/support/tube_raycast.h), on a flat patch and on a
 // cylinder, for view angles from the normal to 85 degrees. Figures are
-// printed as "[ gt ]" lines and written to test-output/groundtruth.txt.
+// printed as "[ gt ]" lines and written to test-output/groundtruth-<TestName>.txt.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -19,10 +19,14 @@ using namespace knit::test;
 
 const double kAngles[] = {0, 15, 30, 45, 60, 75, 85};
 
+// One file per test (CTest runs each test in its own process, possibly in
+// parallel): test-output/groundtruth-<TestName>.txt.
 std::ofstream& report() {
   static std::ofstream f = [] {
     std::filesystem::create_directories(KNIT_TEST_OUTPUT_DIR);
-    return std::ofstream(std::string(KNIT_TEST_OUTPUT_DIR) + "/groundtruth.txt");
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    const std::string name = info ? info->name() : "all";
+    return std::ofstream(std::string(KNIT_TEST_OUTPUT_DIR) + "/groundtruth-" + name + ".txt");
   }();
   return f;
 }
