@@ -39,12 +39,6 @@ constexpr float kBelowOne = 0.99999994f;
 // Tolerance on unit length and orthogonality (as knit::check_direction).
 constexpr double kUnitTol = 1e-3;
 
-std::string num(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-
 std::string idx(const char* name, ssize_t i, bool single) {
   return single ? std::string(name) : std::string(name) + "[" + std::to_string(i) + "]";
 }
@@ -825,6 +819,39 @@ the transmitted path, >= 1, default 1), shadow (ply/fibre shadowing G_{p,f}
 in [0, 1], default 1) and p_delta (probability of passing straight through a
 gap, in [0, 1], default 0).)doc";
 
+const char* kHitDoc = R"doc(
+Arguments, vectorised over N base hits (a number / single vector is used for
+every row): u, v (texture coordinates of the base hit; pattern space is
+x = uv_scale u, y = uv_scale v); ray_dir ((3,) or (N, 3) world direction the
+ray travels, unit); t, b, n (the base mesh's orthonormal world frame at the
+hit: t along dP/du, b along dP/dv, n the front side; all three or none;
+default the frame of `frame` at the hit, else x, y, z); pattern_per_world
+(pattern units per world unit, > 0, default 1); kx, ky (normal curvature of
+the base along t and b, 1/world units, > 0 convex, default 0; used when
+`frame` is None); footprint ((4,) or (N, 4): du/dx, dv/dx, du/dy, dv/dy of
+the pixel, multi-scale only; default 0); shift ((2,) or (N, 2) in [0, 1):
+Cranley-Patterson shift of the footprint's Sobol' points, default 0.5, 0.5);
+frame (a FlatFrame, CylinderFrame or SphereFrame in pattern units: bends the
+CAPM ray with the base surface; near field only).)doc";
+
+// KnitMaterial.shade and .transmittance take the same per-hit arguments
+// (hit_args): one signature, one argument list, for both.
+template <class Fn>
+void def_hit_method(::py::class_<KnitMaterial>& cls, const char* name, Fn fn, const char* doc) {
+  cls.def(
+      name,
+      [fn](const KnitMaterial& km, ::py::handle u, ::py::handle v, ::py::handle ray_dir, ::py::handle t,
+           ::py::handle b, ::py::handle n, ::py::handle ppw, ::py::handle kx, ::py::handle ky,
+           ::py::handle footprint, ::py::handle shift, const FrameProvider* frame) {
+        return fn(km, hit_args(km, u, v, ray_dir, t, b, n, ppw, kx, ky, footprint, shift, frame));
+      },
+      ::py::arg("u"), ::py::arg("v"), ::py::arg("ray_dir"), ::py::kw_only(), ::py::arg("t") = ::py::none(),
+      ::py::arg("b") = ::py::none(), ::py::arg("n") = ::py::none(), ::py::arg("pattern_per_world") = 1.0,
+      ::py::arg("kx") = 0.0, ::py::arg("ky") = 0.0, ::py::arg("footprint") = ::py::none(),
+      ::py::arg("shift") = std::vector<double>{0.5, 0.5}, ::py::arg("frame") = nullptr,
+      (std::string(doc) + kHitDoc).c_str());
+}
+
 }  // namespace
 
 void bind_appearance(::py::module_& m) {
@@ -1063,22 +1090,7 @@ yarn's local frame (x tangent, z normal): normal, tangent, bitangent (N, 3).)doc
                               d["fiber_twist"].cast<double>(), d["yarn_radius"].cast<double>());
                         }));
 
-  const char* hit_doc = R"doc(
-Arguments, vectorised over N base hits (a number / single vector is used for
-every row): u, v (texture coordinates of the base hit; pattern space is
-x = uv_scale u, y = uv_scale v); ray_dir ((3,) or (N, 3) world direction the
-ray travels, unit); t, b, n (the base mesh's orthonormal world frame at the
-hit: t along dP/du, b along dP/dv, n the front side; all three or none;
-default the frame of `frame` at the hit, else x, y, z); pattern_per_world
-(pattern units per world unit, > 0, default 1); kx, ky (normal curvature of
-the base along t and b, 1/world units, > 0 convex, default 0; used when
-`frame` is None); footprint ((4,) or (N, 4): du/dx, dv/dx, du/dy, dv/dy of
-the pixel, multi-scale only; default 0); shift ((2,) or (N, 2) in [0, 1):
-Cranley-Patterson shift of the footprint's Sobol' points, default 0.5, 0.5);
-frame (a FlatFrame, CylinderFrame or SphereFrame in pattern units: bends the
-CAPM ray with the base surface; near field only).)doc";
-
-  ::py::class_<KnitMaterial>(m, "KnitMaterial", R"doc(
+  ::py::class_<KnitMaterial> knit_material(m, "KnitMaterial", R"doc(
 The knit model as a renderer sees it: at a hit of the base mesh, run the
 geometry (CAPM or the flat height query, near field or multi-scale) and
 return the shading point (knit/shading.h).
@@ -1093,7 +1105,8 @@ a dict of its keyword arguments (None: defaults). mode: 'near_field' (one
 CAPM ray) or 'multi_scale' (footprint aggregation, p_delta, LEAN-widened
 roughness, mixed colours). capm=False: no parallax, the height query at the
 hit's (u, v). uv_scale: pattern units per UV unit. max_steps, max_segment,
-max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc")
+max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
+  knit_material
       .def(::py::init(&make_material), ::py::arg("pattern"), ::py::arg("stitch") = StitchParams{},
            ::py::kw_only(), ::py::arg("bsdf") = ::py::none(), ::py::arg("ply") = ::py::none(),
            ::py::arg("mode") = "near_field", ::py::arg("capm") = true,
@@ -1125,21 +1138,14 @@ max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc")
       .def_property_readonly(
           "state_bytes", &KnitMaterial::state_bytes,
           "Memory the model keeps: pattern arrays, ply table, parameters (bytes).")
-      .def(
-          "shade",
-          [](const KnitMaterial& km, ::py::handle u, ::py::handle v, ::py::handle ray_dir,
-             ::py::handle t, ::py::handle b, ::py::handle n, ::py::handle ppw, ::py::handle kx,
-             ::py::handle ky, ::py::handle footprint, ::py::handle shift,
-             const FrameProvider* frame) {
-            return material_shade(
-                km, hit_args(km, u, v, ray_dir, t, b, n, ppw, kx, ky, footprint, shift, frame));
-          },
-          ::py::arg("u"), ::py::arg("v"), ::py::arg("ray_dir"), ::py::kw_only(),
-          ::py::arg("t") = ::py::none(), ::py::arg("b") = ::py::none(),
-          ::py::arg("n") = ::py::none(), ::py::arg("pattern_per_world") = 1.0,
-          ::py::arg("kx") = 0.0, ::py::arg("ky") = 0.0, ::py::arg("footprint") = ::py::none(),
-          ::py::arg("shift") = std::vector<double>{0.5, 0.5}, ::py::arg("frame") = nullptr,
-          (std::string(R"doc(
+      .def("__repr__", [](const KnitMaterial& km) {
+        const Pattern& p = km.surface().pattern();
+        return "<knitshade.KnitMaterial " + std::to_string(p.rows()) + "x" +
+               std::to_string(p.cols()) + " " + mode_name(km.params().mode) +
+               (km.params().capm ? "" : " no-capm") + " uv_scale=" + num(km.params().uv_scale) +
+               ">";
+      });
+  def_hit_method(knit_material, "shade", material_shade, R"doc(
 The shading point of the knit model at N base hits. Returns a dict of arrays:
 pass_through (bool: no yarn on this ray, continue straight on), from_back
 (bool: the ray reached the fabric from behind the mesh), st, sb, sn ((N, 3)
@@ -1153,36 +1159,11 @@ specular transmission alpha_x, alpha_y; multi-scale: LEAN-widened), steps
 (CAPM segments marched, summed over footprint points). Rows with
 pass_through have no shading point: st, sb, sn, offset, shadow, kd_r, kd_t,
 alpha are nan, color -1, layers 0, and p_delta 1 (so p_delta equals
-transmittance() in every row).)doc") +
-           hit_doc)
-              .c_str())
-      .def(
-          "transmittance",
-          [](const KnitMaterial& km, ::py::handle u, ::py::handle v, ::py::handle ray_dir,
-             ::py::handle t, ::py::handle b, ::py::handle n, ::py::handle ppw, ::py::handle kx,
-             ::py::handle ky, ::py::handle footprint, ::py::handle shift,
-             const FrameProvider* frame) {
-            return material_transmittance(
-                km, hit_args(km, u, v, ray_dir, t, b, n, ppw, kx, ky, footprint, shift, frame));
-          },
-          ::py::arg("u"), ::py::arg("v"), ::py::arg("ray_dir"), ::py::kw_only(),
-          ::py::arg("t") = ::py::none(), ::py::arg("b") = ::py::none(),
-          ::py::arg("n") = ::py::none(), ::py::arg("pattern_per_world") = 1.0,
-          ::py::arg("kx") = 0.0, ::py::arg("ky") = 0.0, ::py::arg("footprint") = ::py::none(),
-          ::py::arg("shift") = std::vector<double>{0.5, 0.5}, ::py::arg("frame") = nullptr,
-          (std::string(R"doc(
+transmittance() in every row).)doc");
+  def_hit_method(knit_material, "transmittance", material_transmittance, R"doc(
 Fraction of light a shadow ray along ray_dir passes through the fabric at N
 base hits, (N,) array: near field 0 or 1 (a yarn or a gap), multi-scale
-p_delta.)doc") +
-           hit_doc)
-              .c_str())
-      .def("__repr__", [](const KnitMaterial& km) {
-        const Pattern& p = km.surface().pattern();
-        return "<knitshade.KnitMaterial " + std::to_string(p.rows()) + "x" +
-               std::to_string(p.cols()) + " " + mode_name(km.params().mode) +
-               (km.params().capm ? "" : " no-capm") + " uv_scale=" + num(km.params().uv_scale) +
-               ">";
-      });
+p_delta.)doc");
 }
 
 }  // namespace knit::py

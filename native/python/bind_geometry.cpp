@@ -6,7 +6,6 @@
 #include <pybind11/stl.h>
 
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -20,12 +19,6 @@ namespace knit::py {
 namespace {
 
 using Arr = ::py::array_t<double, ::py::array::c_style | ::py::array::forcecast>;
-
-std::string num(double v) {
-  std::ostringstream o;
-  o << v;
-  return o.str();
-}
 
 void check_finite(const char* what, const double* p, ssize_t n) {
   for (ssize_t i = 0; i < n; ++i)
