@@ -879,6 +879,7 @@ class KnitMaterialInterface(unittest.TestCase):
         down = [0.0, 0.0, -1.0]
         cases = [
             (dict(u=[1.0, np.nan, 2.0]), "u[1] must be finite, got nan"),
+            (dict(u=[1.0, 4e4, 2.0]), "u[1] = 40000: must be finite and in [-32768, 32768]"),
             (dict(v=np.zeros(2)), "v has 2 rows but u has 3"),
             (dict(ray_dir=[[0, 0, -1.0], [0, 0, -2.0], [0, 0, -1.0]]), "ray_dir[1] must be a unit vector"),
             (dict(ray_dir=[0.0, -1.0]), "ray_dir must have shape (3,) or (N, 3), got (2,)"),
