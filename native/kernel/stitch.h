@@ -60,8 +60,8 @@ KNIT_STRUCT(KnitGeom)
   int has_floats;     /* pattern uses codes 2 or 3 */
   float quad_margin;  /* bound on |quadratic interpolant - curve| over a piece */
 KNIT_STRUCT_END(KnitGeom)
-/* KnitGeom is passed by value everywhere: keep it small (no arrays), or the
- * C host spends its time copying it. */
+/* KnitGeom is passed by value in C and OSL (KNIT_IN: by const reference in
+ * C++): keep it small (no arrays), or the C host spends its time copying it. */
 
 KNIT_FN KnitGeom knit_geom_make(float a, float h, float d, float r, int rows, int cols,
                                 int has_floats) {
@@ -265,13 +265,6 @@ KNIT_FN kvec3 knit_profile_node(KNIT_IN(KnitGeom) g, int code, kvec3 sg, int m, 
 KNIT_STRUCT(KBox)
   kvec3 lo, hi;
 KNIT_STRUCT_END(KBox)
-
-KNIT_FN KBox kbox_grow(KNIT_IN(KBox) b, float m) {
-  KBox o;
-  o.lo = kv3(KX(b.lo) - m, KY(b.lo) - m, KZ(b.lo) - m);
-  o.hi = kv3(KX(b.hi) + m, KY(b.hi) + m, KZ(b.hi) + m);
-  return o;
-}
 
 /* Bounds of the unblended profile of `code` over piece j of a cell. Over a
  * piece cos tau is monotone and sin 2tau is a monotone quarter period, so x, y
