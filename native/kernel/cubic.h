@@ -94,7 +94,8 @@ KNIT_FN KRoots solve_cubic(float a3, float a2, float a1, float a0) {
       float m = KF(2.0) * k_sqrt(-tp);
       float phi = k_safe_acos(KF(3.0) * q / (p * m)) / KF(3.0);
       /* cos(phi - 2pi/3) and cos(phi - 4pi/3) from cos phi and sin phi */
-      float cp = k_cos(phi), sp = k_sin(phi);
+      kvec3 cs = knit_sincos(phi);
+      float cp = KY(cs), sp = KX(cs);
       float hc = KF(-0.5) * cp, hs = KF(0.86602540378443864676) * sp;
       r.n = 3;
       r.r0 = m * cp - b3;

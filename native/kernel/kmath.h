@@ -20,6 +20,29 @@ KNIT_FN float k_lerp(float a, float b, float t) { return a + (b - a) * t; }
 KNIT_FN int k_mini(int a, int b) { return a < b ? a : b; }
 KNIT_FN int k_maxi(int a, int b) { return a > b ? a : b; }
 
+/* sin x (KX) and cos x (KY) for |x| <= 16, in plain arithmetic (no libm
+ * call, the same operations on every host): x is reduced by the nearest
+ * multiple q of pi/2, pi/2 split in three parts so that q times the first two
+ * is exact, and the Taylor polynomials of sin and cos to x^9 and x^10 are
+ * used on [-pi/4, pi/4] (truncation below 2e-9 there). tests/native/
+ * test_cubic.cpp checks it against double precision. The stitch curve
+ * evaluates it at every Newton step (stitch.h). */
+KNIT_FN kvec3 knit_sincos(float x) {
+  float qf = KFLT(KINT(x * KF(0.63661977236758134308) + (x >= KF(0.0) ? KF(0.5) : KF(-0.5))));
+  float y = ((x - qf * KF(1.5703125)) - qf * KF(4.837512969970703125e-4)) - qf * KF(7.549789954891882e-8);
+  float y2 = y * y;
+  float s = y + y * y2 * (KF(-1.0) / KF(6.0) +
+                          y2 * (KF(1.0) / KF(120.0) + y2 * (KF(-1.0) / KF(5040.0) + y2 * (KF(1.0) / KF(362880.0)))));
+  float c = KF(1.0) + y2 * (KF(-0.5) + y2 * (KF(1.0) / KF(24.0) +
+                                           y2 * (KF(-1.0) / KF(720.0) +
+                                                 y2 * (KF(1.0) / KF(40320.0) + y2 * (KF(-1.0) / KF(3628800.0))))));
+  int n = KINT(qf) & 3; /* quadrant, also for negative q */
+  if (n == 1) return kv3(c, -s, KF(0.0));
+  if (n == 2) return kv3(-s, -c, KF(0.0));
+  if (n == 3) return kv3(-c, s, KF(0.0));
+  return kv3(s, c, KF(0.0));
+}
+
 /* Floor-modulo for integers: result in [0, n) for n > 0, also for negative a. */
 KNIT_FN int k_modi(int a, int n) {
   int m = a % n;

@@ -144,12 +144,12 @@ KNIT_FN KLineRel knit_line_rel(KNIT_IN(KCurve) cv, kvec3 o, kvec3 D) {
 }
 
 /* Newton on the exact squared distance to the line. */
-KNIT_FN float knit_newton_closest(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, kvec3 o, kvec3 D,
+KNIT_FN float knit_newton_closest(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KSpan) sp, kvec3 o, kvec3 D,
                                   float t_start, int iters) {
   float t = t_start;
   int i;
   for (i = 0; i < iters; i++) {
-    KLineRel lr = knit_line_rel(knit_row_curve_at(g, codes, rw, t), o, D);
+    KLineRel lr = knit_line_rel(knit_span_curve_at(g, codes, sp, t), o, D);
     if (lr.phi2 <= KF(0.0)) break;
     t = t - k_clampf(lr.phi1 / lr.phi2, KF(-0.4), KF(0.4));
   }
@@ -167,13 +167,13 @@ KNIT_STRUCT_END(KExtreme)
  * +1 the exit. Safeguarded Newton: a step that leaves the tube (rho >= r) or
  * lowers the objective is halved. Returns the last point evaluated (rho may be
  * >= r when t_start was outside the tube). */
-KNIT_FN KExtreme knit_newton_extreme(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, kvec3 o, kvec3 D,
+KNIT_FN KExtreme knit_newton_extreme(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KSpan) sp, kvec3 o, kvec3 D,
                                      float t_start, float sgn, int iters) {
   KExtreme e;
   float r2 = g.r * g.r;
   int i;
   e.t = t_start;
-  e.cv = knit_row_curve_at(g, codes, rw, e.t);
+  e.cv = knit_span_curve_at(g, codes, sp, e.t);
   e.lr = knit_line_rel(e.cv, o, D);
   if (e.lr.rho2 >= r2) return e;
   for (i = 0; i < iters; i++) {
@@ -187,9 +187,9 @@ KNIT_FN KExtreme knit_newton_extreme(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes)
     if (f2 < KF(0.0)) step = -f1 / f2;
     else step = f1 * KF(0.05);  /* not concave here: small uphill step */
     step = k_clampf(step, KF(-0.25), KF(0.25));
-    if (k_fabs(step) < KF(1.0e-6)) break;
+    if (k_fabs(step) < KF(1.0e-4)) break;
     for (tries = 0; tries < 4 && moved == 0; tries++) {
-      KCurve nc = knit_row_curve_at(g, codes, rw, e.t + step);
+      KCurve nc = knit_span_curve_at(g, codes, sp, e.t + step);
       KLineRel nl = knit_line_rel(nc, o, D);
       if (nl.rho2 < r2 && sgn * nl.s + k_sqrt(r2 - nl.rho2) >= f) {
         e.t = e.t + step;
@@ -205,18 +205,18 @@ KNIT_FN KExtreme knit_newton_extreme(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes)
   return e;
 }
 
-/* The crossing of row k's tube found from curve parameter t (already near the
- * closest point to the line). Fills s_in, s_out, t, p, n, tangent, row, col, code,
+/* The crossing of span sp's row tube found from curve parameter t (already
+ * near the closest point to the line). Fills s_in, s_out, t, p, n, tangent, row, col, code,
  * color; hit = 1 when the line does pass through the tube. */
 KNIT_FN KnitLineHit knit_crossing(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
-                                  KNIT_IN(KRow) rw, kvec3 o, kvec3 D, float t_close, int need_exit) {
+                                  KNIT_IN(KSpan) sp, kvec3 o, kvec3 D, float t_close, int need_exit) {
   KnitLineHit h = knit_line_hit_none();
   float r2 = g.r * g.r;
-  KExtreme ein = knit_newton_extreme(g, codes, rw, o, D, t_close, KF(-1.0), KNIT_NEWTON_EXTREME);
-  int c;
+  KExtreme ein = knit_newton_extreme(g, codes, sp, o, D, t_close, KF(-1.0), KNIT_NEWTON_EXTREME);
+  int c, ci;
   if (ein.lr.rho2 >= r2) return h;
   if (need_exit != 0) {
-    KExtreme eout = knit_newton_extreme(g, codes, rw, o, D, t_close, KF(1.0), KNIT_NEWTON_EXTREME);
+    KExtreme eout = knit_newton_extreme(g, codes, sp, o, D, t_close, KF(1.0), KNIT_NEWTON_EXTREME);
     if (eout.lr.rho2 >= r2) return h;
     h.s_out = eout.lr.s + k_sqrt(r2 - eout.lr.rho2);
   }
@@ -227,10 +227,11 @@ KNIT_FN KnitLineHit knit_crossing(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), K
   h.n = kv3_normalize(kv3_sub(h.p, ein.cv.p));
   h.tangent = kv3_normalize(ein.cv.d1);
   c = knit_column_of(ein.t);
-  h.row = rw.k;
+  ci = knit_span_covers(sp, c) != 0 ? knit_span_index(sp, c) : k_modi(c, g.cols);
+  h.row = sp.rw.k;
   h.col = c;
-  h.code = codes[rw.off + k_modi(c, g.cols)];
-  h.colour = colors[rw.off + k_modi(c, g.cols)];
+  h.code = codes[sp.rw.off + ci];
+  h.colour = colors[sp.rw.off + ci];
   return h;
 }
 
@@ -245,15 +246,16 @@ KNIT_FN KnitLineHit knit_crossing(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), K
 /* Candidate pieces a FIRST query can order; more are processed unordered. */
 #define KNIT_QUERY_MAX_CAND 48
 
-/* Curve parameter of row rw's point closest to the line (o, D) found from
- * piece gp (quadratic interpolant, cubic, one Newton step on the exact
- * curve), or K_BIG when the interpolant stays farther than m from the line. */
-KNIT_FN float knit_piece_closest_t(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, int gp,
+/* Curve parameter of the point of span sp's row closest to the line (o, D)
+ * found from piece gp of the span's centre column (quadratic interpolant,
+ * cubic, one Newton step on the exact curve), or K_BIG when the interpolant
+ * stays farther than m from the line. */
+KNIT_FN float knit_piece_closest_t(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KSpan) sp, int gp,
                                    kvec3 o, kvec3 D, float m) {
-  KQuad q = knit_piece_quad(g, codes, rw, gp);
+  KQuad q = knit_span_piece_quad(g, codes, sp, gp);
   kvec3 cu = knit_quad_closest(q, o, D);
   if (KY(cu) > m * m) return K_BIG;
-  return knit_newton_closest(g, codes, rw, o, D, q.t0 + KX(cu) * KNIT_PIECE_LEN, KNIT_NEWTON_CLOSEST);
+  return knit_newton_closest(g, codes, sp, o, D, q.t0 + KX(cu) * KNIT_PIECE_LEN, KNIT_NEWTON_CLOSEST);
 }
 
 /* First tube entry along o + s D with s in [s_min, s_max] (D unit), and the
@@ -302,6 +304,7 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
     for (gp = g0; gp <= g1; gp++) {
       float t, u;
       KnitLineHit h;
+      KSpan sp;
       /* Cheap cull first (no pattern lookups), then the exact piece box. */
       u = knit_segment_box_entry(pa, inv, knit_piece_bounds_xy(g, rw.yk, gp), rr);
       if (u < KF(0.0)) continue;
@@ -313,15 +316,16 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
         ncand = ncand + 1;
         continue;
       }
+      sp = knit_span(g, codes, rw, knit_piece_column(gp));
       if (skip_exact == 0) {
-        u = knit_segment_box_entry(pa, inv, knit_piece_bounds(g, codes, rw, gp), rr);
+        u = knit_segment_box_entry(pa, inv, knit_span_piece_bounds(g, sp, gp), rr);
         if (u < KF(0.0)) continue;
       }
-      t = knit_piece_closest_t(g, codes, rw, gp, o, D, m);
+      t = knit_piece_closest_t(g, codes, sp, gp, o, D, m);
       if (t == K_BIG) continue;
       if (k_fabs(t - last_t) < KF(0.1) || k_fabs(t - prev_t) < KF(0.1)) continue;
       if (mode == KNIT_QUERY_COUNT) {
-        KCurve cc = knit_row_curve_at(g, codes, rw, t);
+        KCurve cc = knit_span_curve_at(g, codes, sp, t);
         KLineRel lc = knit_line_rel(cc, o, D);
         if (lc.rho2 < g.r * g.r) {
           prev_t = last_t;
@@ -330,7 +334,7 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
         }
         continue;
       }
-      h = knit_crossing(g, codes, colors, rw, o, D, t, mode == KNIT_QUERY_EXIT ? 1 : 0);
+      h = knit_crossing(g, codes, colors, sp, o, D, t, mode == KNIT_QUERY_EXIT ? 1 : 0);
       if (h.hit == 0) continue;
       prev_t = last_t;
       last_t = t;
@@ -343,7 +347,7 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
     int bi = -1;
     float bs = K_BIG;
     KnitLineHit h;
-    KRow rw;
+    KSpan sp;
     float t, u;
     for (i = 0; i < ncand; i++) {
       if (cand_s[i] < bs) {
@@ -353,12 +357,12 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
     }
     if (bi < 0 || bs > best.s_in) break;
     cand_s[bi] = K_BIG;
-    rw = knit_row(g, cand_k[bi]);
-    u = knit_segment_box_entry(pa, inv, knit_piece_bounds(g, codes, rw, cand_g[bi]), rr);
+    sp = knit_span(g, codes, knit_row(g, cand_k[bi]), knit_piece_column(cand_g[bi]));
+    u = knit_segment_box_entry(pa, inv, knit_span_piece_bounds(g, sp, cand_g[bi]), rr);
     if (u < KF(0.0) || s_min + u * (s_max - s_min) > best.s_in) continue;
-    t = knit_piece_closest_t(g, codes, rw, cand_g[bi], o, D, m);
+    t = knit_piece_closest_t(g, codes, sp, cand_g[bi], o, D, m);
     if (t == K_BIG) continue;
-    h = knit_crossing(g, codes, colors, rw, o, D, t, 0);
+    h = knit_crossing(g, codes, colors, sp, o, D, t, 0);
     if (h.hit != 0 && h.s_in >= s_min && h.s_in <= s_max && h.s_in < best.s_in) best = h;
   }
   best.crossings = mode == KNIT_QUERY_FIRST ? 0 : count;

@@ -130,9 +130,9 @@ KNIT_STRUCT_END(KCurve)
 /* Depth signs (head, legs, sinker) of cell (k, c), see the file header. */
 KNIT_FN float knit_code_sign(int code) { return code == KNIT_CODE_PURL ? KF(-1.0) : KF(1.0); }
 KNIT_FN int knit_code_is_loop(int code) { return code == KNIT_CODE_KNIT || code == KNIT_CODE_PURL; }
-KNIT_FN KCell knit_cell(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, int c) {
+/* Cell of row rw at column index cm, already reduced to [0, cols). */
+KNIT_FN KCell knit_cell_m(KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, int cm) {
   KCell cl;
-  int cm = k_modi(c, g.cols);
   int above = codes[rw.off_up + cm];
   int below = codes[rw.off_dn + cm];
   float sl;
@@ -142,6 +142,41 @@ KNIT_FN KCell knit_cell(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRo
               knit_code_is_loop(below) ? knit_code_sign(below) : sl);
   return cl;
 }
+KNIT_FN KCell knit_cell(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, int c) {
+  return knit_cell_m(codes, rw, k_modi(c, g.cols));
+}
+
+/* Row rw's cells at columns c - 1, c and c + 1: all that the curve needs
+ * anywhere within a column of column c. A search that stays near one piece
+ * (the Newton steps of query.h) looks them up once, instead of taking a
+ * modulo and three pattern reads at every evaluation. */
+KNIT_STRUCT(KSpan)
+  KRow rw;
+  int c;              /* centre column (unwrapped) */
+  int im, il, ir;     /* pattern-row indices of columns c, c - 1, c + 1 */
+  KCell mid, left, right;
+KNIT_STRUCT_END(KSpan)
+
+KNIT_FN KSpan knit_span(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, int c) {
+  KSpan sp;
+  sp.rw = rw;
+  sp.c = c;
+  sp.im = k_modi(c, g.cols);
+  sp.il = sp.im == 0 ? g.cols - 1 : sp.im - 1;
+  sp.ir = sp.im == g.cols - 1 ? 0 : sp.im + 1;
+  sp.mid = knit_cell_m(codes, rw, sp.im);
+  sp.left = knit_cell_m(codes, rw, sp.il);
+  sp.right = knit_cell_m(codes, rw, sp.ir);
+  return sp;
+}
+KNIT_FN int knit_span_covers(KNIT_IN(KSpan) sp, int c) { return c >= sp.c - 1 && c <= sp.c + 1 ? 1 : 0; }
+/* The cell and pattern-row index of column c, which the span covers. */
+KNIT_FN KCell knit_span_cell(KNIT_IN(KSpan) sp, int c) {
+  if (c < sp.c) return sp.left;
+  if (c > sp.c) return sp.right;
+  return sp.mid;
+}
+KNIT_FN int knit_span_index(KNIT_IN(KSpan) sp, int c) { return c < sp.c ? sp.il : (c > sp.c ? sp.ir : sp.im); }
 
 /* Depth polynomial P(c) = (A + sl) c^2 + B c^3 - sl and its derivatives in
  * c: KX = P, KY = P', KZ = P''. */
@@ -156,7 +191,8 @@ KNIT_FN kvec3 knit_depth_poly(kvec3 sg, float c) {
 KNIT_FN KCurve knit_profile(KNIT_IN(KnitGeom) g, int code, kvec3 sg, float tau, float tc, float yk) {
   KCurve cv;
   if (knit_code_is_loop(code)) {
-    float s1 = k_sin(tau), c1 = k_cos(tau);
+    kvec3 sc = knit_sincos(tau);
+    float s1 = KX(sc), c1 = KY(sc);
     float s2 = KF(2.0) * s1 * c1, c2 = c1 * c1 - s1 * s1;
     kvec3 dp = knit_depth_poly(sg, c1);
     cv.p = kv3(tc + tau + g.a * s2, yk + g.h * c1, g.d * KX(dp));
@@ -189,46 +225,70 @@ KNIT_FN int knit_same_profile(KNIT_IN(KCell) a, KNIT_IN(KCell) b) {
   return KX(a.sg) == KX(b.sg) && KY(a.sg) == KY(b.sg) && KZ(a.sg) == KZ(b.sg);
 }
 
+/* The column a point at phase tau of a cell blends with: -1 (left), +1
+ * (right) or 0 (none: tau is not within the blend half-width of the cell's
+ * ends). */
+KNIT_FN int knit_blend_side(float tau) {
+  if (tau > K_PI - KNIT_BLEND_HALF_WIDTH) return 1;
+  if (tau < KNIT_BLEND_HALF_WIDTH - K_PI) return -1;
+  return 0;
+}
+
+/* The curve at t in column c, whose own profile there is `self`, blended
+ * with the profile of neighbour column nc (cell ncl) across their boundary. */
+KNIT_FN KCurve knit_blend_curve(KNIT_IN(KnitGeom) g, KNIT_IN(KCurve) self, KNIT_IN(KCell) ncl, int c, int nc,
+                                float t, float yk) {
+  float ntc = K_2PI * KFLT(nc) + K_PI;
+  float tb = K_2PI * KFLT(k_maxi(c, nc)); /* the boundary between the columns */
+  KCurve other = knit_profile(g, ncl.code, ncl.sg, t - ntc, ntc, yk);
+  KCurve lo, hi, out;
+  kvec3 w, dp, dd1, dd2;
+  if (nc > c) { /* lo: the cell left of the boundary */
+    lo = self;
+    hi = other;
+  } else {
+    lo = other;
+    hi = self;
+  }
+  w = knit_blend_weight(t, tb);
+  dp = kv3_sub(hi.p, lo.p);
+  dd1 = kv3_sub(hi.d1, lo.d1);
+  dd2 = kv3_sub(hi.d2, lo.d2);
+  out.p = kv3_madd(lo.p, dp, KX(w));
+  out.d1 = kv3_madd(kv3_madd(lo.d1, dd1, KX(w)), dp, KY(w));
+  out.d2 = kv3_madd(kv3_madd(kv3_madd(lo.d2, dd2, KX(w)), dd1, KF(2.0) * KY(w)), dp, KZ(w));
+  return out;
+}
+
 /* The exact yarn curve of a row at global parameter t (see the file header). */
 KNIT_FN KCurve knit_row_curve_at(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, float t) {
   int c = knit_column_of(t);
   float tc = K_2PI * KFLT(c) + K_PI;
-  float tau = t - tc;
   KCell cl = knit_cell(g, codes, rw, c);
-  KCurve self = knit_profile(g, cl.code, cl.sg, tau, tc, rw.yk);
-  int nc = c;
-  float tb = KF(0.0);
-  if (tau > K_PI - KNIT_BLEND_HALF_WIDTH) {
-    nc = c + 1;
-    tb = tc + K_PI;
-  } else if (tau < KNIT_BLEND_HALF_WIDTH - K_PI) {
-    nc = c - 1;
-    tb = tc - K_PI;
-  }
+  KCurve self = knit_profile(g, cl.code, cl.sg, t - tc, tc, rw.yk);
+  int nc = c + knit_blend_side(t - tc);
+  KCell ncl;
   if (nc == c) return self;
-  {
-    KCell ncl = knit_cell(g, codes, rw, nc);
-    float ntc = K_2PI * KFLT(nc) + K_PI;
-    KCurve other, lo, hi, out;
-    kvec3 w, dp, dd1, dd2;
-    if (knit_same_profile(cl, ncl)) return self;
-    other = knit_profile(g, ncl.code, ncl.sg, t - ntc, ntc, rw.yk);
-    if (nc > c) { /* lo: the cell left of the boundary */
-      lo = self;
-      hi = other;
-    } else {
-      lo = other;
-      hi = self;
-    }
-    w = knit_blend_weight(t, tb);
-    dp = kv3_sub(hi.p, lo.p);
-    dd1 = kv3_sub(hi.d1, lo.d1);
-    dd2 = kv3_sub(hi.d2, lo.d2);
-    out.p = kv3_madd(lo.p, dp, KX(w));
-    out.d1 = kv3_madd(kv3_madd(lo.d1, dd1, KX(w)), dp, KY(w));
-    out.d2 = kv3_madd(kv3_madd(kv3_madd(lo.d2, dd2, KX(w)), dd1, KF(2.0) * KY(w)), dp, KZ(w));
-    return out;
-  }
+  ncl = knit_cell(g, codes, rw, nc);
+  if (knit_same_profile(cl, ncl)) return self;
+  return knit_blend_curve(g, self, ncl, c, nc, t, rw.yk);
+}
+
+/* The same through a span's cells (knit_span): t should lie within a column
+ * of the span's centre; elsewhere the row is looked up as above. */
+KNIT_FN KCurve knit_span_curve_at(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KSpan) sp, float t) {
+  int c = knit_column_of(t);
+  float tc = K_2PI * KFLT(c) + K_PI;
+  int nc = c + knit_blend_side(t - tc);
+  KCell cl, ncl;
+  KCurve self;
+  if (knit_span_covers(sp, c) == 0 || knit_span_covers(sp, nc) == 0) return knit_row_curve_at(g, codes, sp.rw, t);
+  cl = knit_span_cell(sp, c);
+  self = knit_profile(g, cl.code, cl.sg, t - tc, tc, sp.rw.yk);
+  if (nc == c) return self;
+  ncl = knit_span_cell(sp, nc);
+  if (knit_same_profile(cl, ncl)) return self;
+  return knit_blend_curve(g, self, ncl, c, nc, t, sp.rw.yk);
 }
 
 KNIT_FN KCurve knit_row_curve(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), int k, float t) {
@@ -333,18 +393,20 @@ KNIT_FN KBox knit_piece_bounds_xy(KNIT_IN(KnitGeom) g, float yk, int gp) {
 /* The cell and code of the neighbour a piece blends with (or the cell itself). */
 KNIT_FN int knit_piece_neighbour(int j) { return j == 0 ? -1 : (j == 7 ? 1 : 0); }
 
-/* Conservative bounds of the exact curve of row k over global piece gp. A
- * blended piece lies in the union of both profiles' boxes (convex weights). */
-KNIT_FN KBox knit_piece_bounds(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, int gp) {
-  int c = KINT(k_floor(KFLT(gp) / KF(8.0)));
-  int j = gp - 8 * c;
-  float tc = K_2PI * KFLT(c) + K_PI, yk = rw.yk;
-  KCell cl = knit_cell(g, codes, rw, c);
-  KBox b = knit_profile_piece_bounds(g, cl.code, cl.sg, j, tc, yk);
+/* Column of global piece gp. */
+KNIT_FN int knit_piece_column(int gp) { return KINT(k_floor(KFLT(gp) / KF(8.0))); }
+
+/* Conservative bounds of the exact curve of span sp's row over global piece
+ * gp of its centre column. A blended piece lies in the union of both
+ * profiles' boxes (convex weights). */
+KNIT_FN KBox knit_span_piece_bounds(KNIT_IN(KnitGeom) g, KNIT_IN(KSpan) sp, int gp) {
+  int j = gp - 8 * sp.c;
+  float tc = K_2PI * KFLT(sp.c) + K_PI, yk = sp.rw.yk;
+  KBox b = knit_profile_piece_bounds(g, sp.mid.code, sp.mid.sg, j, tc, yk);
   int dn = knit_piece_neighbour(j);
   if (dn != 0) {
-    KCell ncl = knit_cell(g, codes, rw, c + dn);
-    if (knit_same_profile(cl, ncl) == 0) {
+    KCell ncl = knit_span_cell(sp, sp.c + dn);
+    if (knit_same_profile(sp.mid, ncl) == 0) {
       /* The neighbour's profile over the same t range: its piece 8 (just past
        * its right end) when it is on the left, piece -1 when on the right. */
       float ntc = tc + KFLT(dn) * K_2PI;
@@ -354,6 +416,11 @@ KNIT_FN KBox knit_piece_bounds(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT
     }
   }
   return b;
+}
+
+/* The same for row rw (any global piece). */
+KNIT_FN KBox knit_piece_bounds(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, int gp) {
+  return knit_span_piece_bounds(g, knit_span(g, codes, rw, knit_piece_column(gp)), gp);
 }
 
 /* Quadratic interpolant Q(u) = q0 + q1 u + q2 u^2, u in [0, 1], of the exact
@@ -373,25 +440,29 @@ KNIT_FN KQuad knit_quad_from_nodes(kvec3 f0, kvec3 f1, kvec3 f2, float t0) {
   return q;
 }
 
-KNIT_FN KQuad knit_piece_quad(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, int gp) {
-  int c = KINT(k_floor(KFLT(gp) / KF(8.0)));
-  int j = gp - 8 * c;
+/* Interpolant of span sp's row over global piece gp of its centre column. */
+KNIT_FN KQuad knit_span_piece_quad(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KSpan) sp, int gp) {
+  int j = gp - 8 * sp.c;
   float t0 = KFLT(gp) * K_PI_4;
   int dn = knit_piece_neighbour(j);
-  KCell cl = knit_cell(g, codes, rw, c);
-  if (dn == 0 || knit_same_profile(cl, knit_cell(g, codes, rw, c + dn))) {
-    float tc = K_2PI * KFLT(c) + K_PI;
-    return knit_quad_from_nodes(knit_profile_node(g, cl.code, cl.sg, 2 * j, tc, rw.yk),
-                                knit_profile_node(g, cl.code, cl.sg, 2 * j + 1, tc, rw.yk),
-                                knit_profile_node(g, cl.code, cl.sg, 2 * j + 2, tc, rw.yk), t0);
+  if (dn == 0 || knit_same_profile(sp.mid, knit_span_cell(sp, sp.c + dn))) {
+    float tc = K_2PI * KFLT(sp.c) + K_PI;
+    return knit_quad_from_nodes(knit_profile_node(g, sp.mid.code, sp.mid.sg, 2 * j, tc, sp.rw.yk),
+                                knit_profile_node(g, sp.mid.code, sp.mid.sg, 2 * j + 1, tc, sp.rw.yk),
+                                knit_profile_node(g, sp.mid.code, sp.mid.sg, 2 * j + 2, tc, sp.rw.yk), t0);
   }
   {
     /* Blended piece: interpolate the exact (blended) curve. */
-    KCurve n0 = knit_row_curve_at(g, codes, rw, t0);
-    KCurve n1 = knit_row_curve_at(g, codes, rw, t0 + KF(0.5) * K_PI_4);
-    KCurve n2 = knit_row_curve_at(g, codes, rw, t0 + K_PI_4);
+    KCurve n0 = knit_span_curve_at(g, codes, sp, t0);
+    KCurve n1 = knit_span_curve_at(g, codes, sp, t0 + KF(0.5) * K_PI_4);
+    KCurve n2 = knit_span_curve_at(g, codes, sp, t0 + K_PI_4);
     return knit_quad_from_nodes(n0.p, n1.p, n2.p, t0);
   }
+}
+
+/* The same for row rw (any global piece). */
+KNIT_FN KQuad knit_piece_quad(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, int gp) {
+  return knit_span_piece_quad(g, codes, knit_span(g, codes, rw, knit_piece_column(gp)), gp);
 }
 
 KNIT_FN kvec3 knit_quad_eval(KNIT_IN(KQuad) q, float x) {

@@ -114,4 +114,30 @@ TEST(Cubic, HostCubeRootIsAccurate) {
   EXPECT_TRUE(std::isnan(knit::k::knit_host_cbrt(NAN)));
 }
 
+// knit_sincos (kmath.h) replaces libm's sinf/cosf in the stitch curve: against
+// double precision over the range it is documented for, and at the quadrant
+// boundaries where its reduction switches polynomials.
+TEST(KernelMath, SincosAgreesWithDoublePrecision) {
+  double worst = 0;
+  std::vector<float> xs;
+  for (int i = -1600000; i <= 1600000; ++i) xs.push_back(float(i) * 1e-5f);
+  for (int q = -10; q <= 10; ++q)
+    for (int ulp = -4; ulp <= 4; ++ulp) {
+      float x = float(q * 1.5707963267948966);
+      for (int u = 0; u < std::abs(ulp); ++u) x = std::nextafter(x, ulp > 0 ? 100.f : -100.f);
+      xs.push_back(x);
+    }
+  for (float x : xs) {
+    const knit::k::kvec3 sc = knit::k::knit_sincos(x);
+    ASSERT_TRUE(std::isfinite(sc.x) && std::isfinite(sc.y)) << "x = " << x;
+    worst = std::max(worst, std::abs(double(sc.x) - std::sin(double(x))));
+    worst = std::max(worst, std::abs(double(sc.y) - std::cos(double(x))));
+  }
+  // float's unit roundoff is 6e-8: a couple of roundings in the reduction
+  // and the polynomial
+  EXPECT_LT(worst, 2.5e-7) << "max absolute error of knit_sincos on [-16, 16]";
+  EXPECT_EQ(knit::k::knit_sincos(0.f).x, 0.f);
+  EXPECT_EQ(knit::k::knit_sincos(0.f).y, 1.f);
+}
+
 }  // namespace

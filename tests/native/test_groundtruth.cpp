@@ -69,8 +69,9 @@ TEST(GroundTruth, VerticalQueryMatchesExplicitTubes) {
         // closest to (x, y) in the plane, plus sqrt(r^2 - rho^2).
         const k::KRow rw = k::knit_row(sc.surface.geom(), m.row);
         const k::kvec3 o = k::kv3(float(x), float(y), 10.f), dn = k::kv3(0, 0, -1);
-        float tc = k::knit_newton_closest(sc.surface.geom(), sc.surface.codes(), rw, o, dn, m.position.x, 1);
-        tc = k::knit_newton_closest(sc.surface.geom(), sc.surface.codes(), rw, o, dn, tc, 8);
+        const k::KSpan sp = k::knit_span(sc.surface.geom(), sc.surface.codes(), rw, k::knit_column_of(m.position.x));
+        float tc = k::knit_newton_closest(sc.surface.geom(), sc.surface.codes(), sp, o, dn, m.position.x, 1);
+        tc = k::knit_newton_closest(sc.surface.geom(), sc.surface.codes(), sp, o, dn, tc, 8);
         const k::KCurve cv = k::knit_row_curve_at(sc.surface.geom(), sc.surface.codes(), rw, tc);
         const double rho2 = (cv.p.x - x) * (cv.p.x - x) + (cv.p.y - y) * (cv.p.y - y);
         if (rho2 < r * r) {
