@@ -16,7 +16,7 @@ summary) to OUT_DIR.
   overhead        the knit model against a plain diffuse material of the same
                   colour on the same mesh and lights, same samples.
 
-  /usr/bin/python3 scripts/bench_knit.py BUILD_DIR OUT_DIR [--quick]
+  /usr/bin/python3 scripts/bench_knit.py BUILD_DIR OUT_DIR [--quick] [--paper-far-view]
 """
 import json
 import math
@@ -193,6 +193,30 @@ def main():
     far4["materials"]["wool"]["footprint_points"] = 4
     b.results["far_view_4_points"] = b.equal_quality("far_view4", far4, near, "multi_scale", "near_field", ladder,
                                                      ref_spp, tag_b="far_near_field")
+
+    # 3b. (--paper-far-view, about 15 more minutes) The same under environment
+    # light only, as in the paper's Figure 13, with the seed pattern and with
+    # the two-colour diamond blocks (where which yarn a sample hits changes
+    # its colour, the noise multi-scale aggregation removes).
+    if "--paper-far-view" in sys.argv:
+        def env_only(scene, two_colour):
+            s = json.loads(json.dumps(scene))
+            s["lights"] = [light for light in s["lights"] if light["type"] == "environment"]
+            s["lights"][0]["strength"] = 1.0
+            if two_colour:
+                m = s["materials"]["wool"]
+                m["pattern"] = os.path.join(ROOT, "examples", "patterns", "diamond_blocks_2colour.knit")
+                m["yarn_colors"] = [[0.72, 0.18, 0.14], [0.85, 0.82, 0.75]]
+            return s
+        for name, two in (("env", False), ("env_2colour", True)):
+            ms = env_only(far, two)
+            nf = env_only(near, two)
+            ms4 = json.loads(json.dumps(ms))
+            ms4["materials"]["wool"]["footprint_points"] = 4
+            b.results["far_view_" + name] = b.equal_quality(
+                "far_" + name, ms, nf, "multi_scale", "near_field", ladder, ref_spp, tag_b="far_nf_" + name)
+            b.results["far_view_" + name + "_4_points"] = b.equal_quality(
+                "far4_" + name, ms4, nf, "multi_scale", "near_field", ladder, ref_spp, tag_b="far_nf_" + name)
 
     # 4. Overhead of the knit material against diffuse, same mesh, lights and samples.
     b.results["overhead"] = {

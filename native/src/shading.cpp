@@ -93,6 +93,8 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
   for (int i = 0; i < 64; ++i)
     for (int j = 0; j < 16; ++j) g += ply_.lookup(6.2831853f * (i + 0.5f) / 64, 0.37f * float(j)).shadow;
   mean_shadow_ = params_.ply_detail ? float(g / (64 * 16)) : 1.0f;
+  if (params_.mode == KnitMode::MultiScale && params_.footprint_table)
+    table_ = std::make_shared<const FootprintTable>(surface_, params_.capm_options);
 }
 
 size_t KnitMaterial::state_bytes() const {
@@ -103,7 +105,8 @@ size_t KnitMaterial::state_bytes() const {
     return (p.codes().size() + p.colors_or_zero().size() + (p.has_colors() ? p.codes().size() : 0)) *
            sizeof(int32_t);
   };
-  return sizeof(*this) + heap(surface_.pattern()) + 4 * sizeof(Rgb) * size_t(params_.bsdf.num_colors());
+  return sizeof(*this) + heap(surface_.pattern()) + 4 * sizeof(Rgb) * size_t(params_.bsdf.num_colors()) +
+         (table_ ? table_->bytes() : 0);
 }
 
 k::KnitCapm KnitMaterial::march(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame) const {
@@ -164,10 +167,14 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     // The footprint's points share the frame at the hit; a frame field
     // contributes its curvature there (pattern units).
     const Vec3 kap = frame ? frame->curvature(x, y) : k::kv3(hit.kx / S, hit.ky / S, 0);
-    const k::KnitAggregate a = k::knit_aggregate(
-        surface_.geom(), surface_.codes(), surface_.colors(), x, y, k::kv3(us * hit.dudx, us * hit.dvdx, 0),
-        k::kv3(us * hit.dudy, us * hit.dvdy, 0), wi, params_.footprint_points, shift[0], shift[1], kap.x,
-        kap.y, params_.capm_options.max_segment, params_.capm_options.max_steps);
+    const Vec3 fx = k::kv3(us * hit.dudx, us * hit.dvdx, 0), fy = k::kv3(us * hit.dudy, us * hit.dvdy, 0);
+    const k::KFootprint f =
+        k::knit_footprint(surface_.geom(), x, y, fx, fy, params_.footprint_points, shift[0], shift[1]);
+    const k::KnitAggregate a =
+        table_ && f.stratified ? table_->aggregate(surface_, f, wi)
+                               : k::knit_aggregate(surface_.geom(), surface_.codes(), surface_.colors(), x, y, fx, fy,
+                                                   wi, params_.footprint_points, shift[0], shift[1], kap.x, kap.y,
+                                                   params_.capm_options.max_segment, params_.capm_options.max_steps);
     sh.steps = int(a.steps * float(a.points) + 0.5f);
     if (a.hits == 0) {
       sh.point.p_delta = 1;
@@ -294,6 +301,7 @@ float KnitMaterial::transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameP
     const k::KFootprint f =
         k::knit_footprint(surface_.geom(), x, y, k::kv3(us * hit.dudx, us * hit.dvdx, 0),
                           k::kv3(us * hit.dudy, us * hit.dvdy, 0), params_.footprint_points, shift[0], shift[1]);
+    if (table_ && f.stratified) return table_->p_delta(surface_, f, wi);
     return k::knit_footprint_p_delta(surface_.geom(), surface_.codes(), surface_.colors(), f, wi, kap.x, kap.y,
                                      params_.capm_options.max_segment, params_.capm_options.max_steps);
   }

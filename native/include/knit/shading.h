@@ -15,6 +15,7 @@
 #include <array>
 #include <memory>
 
+#include "knit/aggregate_table.h"
 #include "knit/bsdf.h"
 #include "knit/ply_profile.h"
 #include "knit/surface.h"
@@ -31,6 +32,7 @@ struct KnitMaterialParams {
   KnitMode mode = KnitMode::NearField;
   bool capm = true;             // false: no parallax, the height query at the hit's (u, v)
   int footprint_points = 16;    // multi-scale Sobol' points (docs/multiscale.md)
+  bool footprint_table = true;  // multi-scale footprints of a cell or more: the class table, not marches
   float uv_scale = 40.0f;       // pattern units per UV unit (x = uv_scale u, y = uv_scale v)
   CapmOptions capm_options;
 
@@ -84,8 +86,10 @@ class KnitMaterial {
   // layers and ply shadow from `sh`).
   k::KYarnBsdf kernel_bsdf(const KnitShade& sh) const;
 
-  // Memory the model keeps: pattern arrays, ply table, parameters (bytes).
+  // Memory the model keeps: pattern arrays, ply table, parameters, the
+  // multi-scale footprint table (bytes).
   size_t state_bytes() const;
+  const FootprintTable* footprint_table() const { return table_.get(); }
 
  private:
   k::KnitCapm march(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame) const;
@@ -97,6 +101,7 @@ class KnitMaterial {
   KnitSurface surface_;
   YarnBsdf bsdf_;
   PlyProfile ply_;
+  std::shared_ptr<const FootprintTable> table_;  // multi-scale with footprint_table: built at construction
   float arc_per_t_ = 1;     // mean arc length of the yarn per unit of curve parameter
   float mean_shadow_ = 1;   // ply shadow averaged around and along the yarn
 };

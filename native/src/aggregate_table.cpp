@@ -1,0 +1,307 @@
+#include "knit/aggregate_table.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+namespace knit {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+
+// Slopes of a hit normal as knit_aggregate takes them (multiscale.h).
+void slopes(Vec3 n, float side, float& bx, float& by) {
+  const float nz = std::max(side * n.z, 1.0f / std::sqrt(1.0f + KNIT_MS_MAX_SLOPE * KNIT_MS_MAX_SLOPE));
+  bx = std::clamp(n.x / nz, -KNIT_MS_MAX_SLOPE, KNIT_MS_MAX_SLOPE);
+  by = std::clamp(n.y / nz, -KNIT_MS_MAX_SLOPE, KNIT_MS_MAX_SLOPE);
+}
+
+Vec3 direction(int it, int ip) {
+  const float th = float(it) * kPi / float(FootprintTable::kThetaBins - 1);
+  const float ph = float(ip) * 2 * kPi / float(FootprintTable::kPhiBins);
+  return k::kv3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
+}
+
+}  // namespace
+
+int FootprintTable::cell_class(const KnitSurface& surface, int k, int c) {
+  const k::KnitGeom& g = surface.geom();
+  const k::KCell cl = k::knit_cell(g, surface.codes(), k::knit_row(g, k), c);
+  if (cl.code == KNIT_CODE_FRONT) return 8;
+  if (cl.code == KNIT_CODE_BACK) return 9;
+  return (cl.code == KNIT_CODE_PURL ? 4 : 0) + (cl.sg.x < 0 ? 2 : 0) + (cl.sg.z < 0 ? 1 : 0);
+}
+
+FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& capm, int rays_per_direction) {
+  const k::KnitGeom& g = surface.geom();
+  std::array<std::vector<std::pair<int, int>>, kClasses> cells;
+  for (int k = 0; k < g.rows; ++k)
+    for (int c = 0; c < g.cols; ++c) cells[size_t(cell_class(surface, k, c))].emplace_back(k, c);
+  int slots = 0;
+  for (int i = 0; i < kClasses; ++i) slot_[size_t(i)] = cells[size_t(i)].empty() ? -1 : slots++;
+  stats_.assign(size_t(slots) * kThetaBins * kPhiBins, Stats{});
+  const int m_rays = std::max(1, rays_per_direction);
+  tbb::parallel_for(0, kClasses * kThetaBins, [&](int job) {
+    const int cls = job / kThetaBins, it = job % kThetaBins;
+    if (slot_[size_t(cls)] < 0) return;
+    const std::vector<std::pair<int, int>>& list = cells[size_t(cls)];
+    for (int ip = 0; ip < kPhiBins; ++ip) {
+      const Vec3 wi = direction(it, ip);
+      const float side = wi.z < 0 ? -1.0f : 1.0f;
+      double hits = 0, n[3] = {0, 0, 0}, sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0, layers = 0, z = 0;
+      double near[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+      Vec3 tsum = k::kv3(0, 0, 0);
+      for (int m = 0; m < m_rays; ++m) {
+        // Cells of the class in turn (a stride coprime with most sizes
+        // spreads them), the point inside the cell from a (0,2)-net.
+        const std::pair<int, int>& cell = list[(size_t(m) * 7919u) % list.size()];
+        const Vec3 q = k::knit_sobol2((it * kPhiBins + ip) * m_rays + m);  // other points per direction
+        const float x = (float(cell.second) + k::knit_frac(q.x + 0.5f)) * 6.28318531f;
+        const float y = (float(cell.first) + k::knit_frac(q.y + 0.5f)) * g.row_spacing;
+        const k::KnitCapm st = k::knit_capm_curved(g, surface.codes(), surface.colors(), x, y, wi, 0, 0,
+                                                   capm.max_segment, capm.max_steps);
+        if (st.state != KNIT_CAPM_HIT) continue;
+        hits += 1;
+        n[0] += st.hit.n.x;
+        n[1] += st.hit.n.y;
+        n[2] += st.hit.n.z;
+        tsum = k::kv3_dot(tsum, st.hit.tangent) < 0 ? k::kv3_sub(tsum, st.hit.tangent)
+                                                     : k::kv3_add(tsum, st.hit.tangent);
+        float bx, by;
+        slopes(st.hit.n, side, bx, by);
+        sx += bx;
+        sy += by;
+        sxx += double(bx) * bx;
+        sxy += double(bx) * by;
+        syy += double(by) * by;
+        layers += k::knit_vertical_layers(g, surface.codes(), surface.colors(), st.hit.p.x, st.hit.p.y);
+        z += st.hit.p.z;
+        const int dk = std::clamp(st.hit.row - cell.first, -1, 1), dc = std::clamp(st.hit.col - cell.second, -1, 1);
+        near[(dk + 1) * 3 + dc + 1] += 1;
+      }
+      Stats& s = stats_[(size_t(slot_[size_t(cls)]) * kThetaBins + size_t(it)) * kPhiBins + size_t(ip)];
+      s.hit = float(hits / m_rays);
+      if (hits > 0) {
+        const double inv = 1.0 / hits;
+        s.nx = float(n[0] * inv);
+        s.ny = float(n[1] * inv);
+        s.nz = float(n[2] * inv);
+        const Vec3 t = k::kv3_normalize(tsum);
+        s.tx = t.x;
+        s.ty = t.y;
+        s.tz = t.z;
+        s.sx = float(sx * inv);
+        s.sy = float(sy * inv);
+        s.sxx = float(sxx * inv);
+        s.sxy = float(sxy * inv);
+        s.syy = float(syy * inv);
+        s.layers = float(layers * inv);
+        s.z = float(z * inv);
+        for (int q = 0; q < 9; ++q) s.near[q] = float(near[q] * inv);
+      }
+    }
+  });
+  // The rows at theta = 0 and pi are one direction each: their columns,
+  // marched with different points, are averaged.
+  for (int slot = 0; slot < slots; ++slot)
+    for (int it : {0, kThetaBins - 1}) {
+      Stats* row = &stats_[(size_t(slot) * kThetaBins + size_t(it)) * kPhiBins];
+      Stats avg;
+      avg.nz = avg.tx = 0;
+      double hit = 0;
+      Vec3 tsum = k::kv3(0, 0, 0);
+      for (int ip = 0; ip < kPhiBins; ++ip) hit += row[ip].hit;
+      for (int ip = 0; ip < kPhiBins; ++ip) {
+        const Stats& s = row[ip];
+        const float w = hit > 0 ? float(s.hit / hit) : 0.0f;
+        avg.nx += w * s.nx;
+        avg.ny += w * s.ny;
+        avg.nz += w * s.nz;
+        const Vec3 t = k::kv3_scale(k::kv3(s.tx, s.ty, s.tz), w);
+        tsum = k::kv3_dot(tsum, t) < 0 ? k::kv3_sub(tsum, t) : k::kv3_add(tsum, t);
+        avg.sx += w * s.sx;
+        avg.sy += w * s.sy;
+        avg.sxx += w * s.sxx;
+        avg.sxy += w * s.sxy;
+        avg.syy += w * s.syy;
+        avg.layers += w * s.layers;
+        avg.z += w * s.z;
+        for (int q = 0; q < 9; ++q) avg.near[q] += w * s.near[q];
+      }
+      avg.hit = float(hit / kPhiBins);
+      const Vec3 t = hit > 0 ? k::kv3_normalize(tsum) : k::kv3(1, 0, 0);
+      avg.tx = t.x;
+      avg.ty = t.y;
+      avg.tz = t.z;
+      if (hit <= 0) avg = Stats{};
+      for (int ip = 0; ip < kPhiBins; ++ip) row[ip] = avg;
+    }
+}
+
+int FootprintTable::classes_present() const {
+  return int(std::count_if(slot_.begin(), slot_.end(), [](int s) { return s >= 0; }));
+}
+
+FootprintTable::Stats FootprintTable::lookup(int cls, Vec3 wi) const {
+  Stats out;
+  const int slot = slot_[size_t(cls)];
+  if (slot < 0) return out;  // not in the pattern (cannot happen for its own cells)
+  const float th = std::acos(std::clamp(wi.z, -1.0f, 1.0f));
+  float ph = std::atan2(wi.y, wi.x);
+  if (ph < 0) ph += 2 * kPi;
+  const float ft = std::clamp(th / kPi * float(kThetaBins - 1), 0.0f, float(kThetaBins - 1));
+  const int i0 = std::min(int(ft), kThetaBins - 1), i1 = std::min(i0 + 1, kThetaBins - 1);
+  const float wt = ft - float(i0);
+  const float fp = ph / (2 * kPi) * kPhiBins;
+  const int j0 = std::min(int(fp), kPhiBins - 1), j1 = (j0 + 1) % kPhiBins;
+  const float wp = std::clamp(fp - float(j0), 0.0f, 1.0f);
+  const int is[4] = {i0, i0, i1, i1}, js[4] = {j0, j1, j0, j1};
+  const float ws[4] = {(1 - wt) * (1 - wp), (1 - wt) * wp, wt * (1 - wp), wt * wp};
+  // Hit-conditioned means are interpolated with hit-weighted weights.
+  float hsum = 0, wsum = 0;
+  Stats acc;
+  acc.nz = acc.tx = 0;
+  Vec3 tsum = k::kv3(0, 0, 0);
+  for (int q = 0; q < 4; ++q) {
+    const Stats& s = stats_[(size_t(slot) * kThetaBins + size_t(is[q])) * kPhiBins + size_t(js[q])];
+    hsum += ws[q] * s.hit;
+    const float w = ws[q] * s.hit;
+    if (w <= 0) continue;
+    wsum += w;
+    acc.nx += w * s.nx;
+    acc.ny += w * s.ny;
+    acc.nz += w * s.nz;
+    const Vec3 t = k::kv3_scale(k::kv3(s.tx, s.ty, s.tz), w);
+    tsum = k::kv3_dot(tsum, t) < 0 ? k::kv3_sub(tsum, t) : k::kv3_add(tsum, t);
+    acc.sx += w * s.sx;
+    acc.sy += w * s.sy;
+    acc.sxx += w * s.sxx;
+    acc.sxy += w * s.sxy;
+    acc.syy += w * s.syy;
+    acc.layers += w * s.layers;
+    acc.z += w * s.z;
+    for (int i = 0; i < 9; ++i) acc.near[i] += w * s.near[i];
+  }
+  out.hit = hsum;
+  if (wsum > 0) {
+    const float inv = 1 / wsum;
+    out.nx = acc.nx * inv;
+    out.ny = acc.ny * inv;
+    out.nz = acc.nz * inv;
+    const Vec3 t = k::kv3_normalize(tsum);
+    out.tx = t.x;
+    out.ty = t.y;
+    out.tz = t.z;
+    out.sx = acc.sx * inv;
+    out.sy = acc.sy * inv;
+    out.sxx = acc.sxx * inv;
+    out.sxy = acc.sxy * inv;
+    out.syy = acc.syy * inv;
+    out.layers = acc.layers * inv;
+    out.z = acc.z * inv;
+    for (int i = 0; i < 9; ++i) out.near[i] = acc.near[i] * inv;
+  }
+  return out;
+}
+
+template <class Visit>
+void FootprintTable::for_each_cell(const KnitSurface& surface, const k::KFootprint& f, Visit&& visit) const {
+  const k::KnitGeom& g = surface.geom();
+  if (f.ncx * f.ncy <= KNIT_MS_MAX_POINTS) {
+    for (int cy = 0; cy < f.ncy; ++cy)
+      for (int cx = 0; cx < f.ncx; ++cx) visit(f.by0 + cy, f.bx0 + cx);
+    return;
+  }
+  for (int i = 0; i < f.n; ++i) {
+    const Vec3 p = k::knit_footprint_point(g, f, i);
+    visit(int(std::floor(p.y / g.row_spacing)), int(std::floor(p.x / 6.28318531f)));
+  }
+}
+
+k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
+  const k::KnitGeom& g = surface.geom();
+  k::KnitAggregate a{};
+  double cells = 0, hits = 0, sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0, layers = 0, z = 0;
+  Vec3 nsum = k::kv3(0, 0, 0), tsum = k::kv3(0, 0, 0);
+  struct Pick {
+    int colour;
+    float cum;
+  };
+  std::array<Pick, KNIT_MS_MAX_POINTS> picks{};
+  int npicks = 0;
+  for_each_cell(surface, f, [&](int k, int c) {
+    const Stats s = lookup(cell_class(surface, k, c), wi);
+    cells += 1;
+    if (s.hit <= 0) return;
+    const float w = s.hit;
+    hits += w;
+    nsum = k::kv3_madd(nsum, k::kv3(s.nx, s.ny, s.nz), w);
+    const Vec3 t = k::kv3_scale(k::kv3(s.tx, s.ty, s.tz), w);
+    tsum = k::kv3_dot(tsum, t) < 0 ? k::kv3_sub(tsum, t) : k::kv3_add(tsum, t);
+    sx += w * s.sx;
+    sy += w * s.sy;
+    sxx += w * s.sxx;
+    sxy += w * s.sxy;
+    syy += w * s.syy;
+    layers += w * s.layers;
+    z += w * s.z;
+    // Colours of the yarns hit: the 3 x 3 block around the cell, by share.
+    int colour = -1;
+    float share = -1;
+    for (int dk = -1; dk <= 1; ++dk)
+      for (int dc = -1; dc <= 1; ++dc) {
+        const float q = s.near[(dk + 1) * 3 + dc + 1];
+        if (q <= 0) continue;
+        const int col = surface.colors()[k::knit_cell_index(g, k + dk, c + dc)];
+        a.color_w[std::clamp(col, 0, KNIT_MS_COLORS - 1)] += w * q;
+        if (q > share) {
+          share = q;
+          colour = col;
+        }
+      }
+    if (npicks < KNIT_MS_MAX_POINTS) picks[size_t(npicks++)] = {colour, float(hits)};
+  });
+  a.points = int(cells);
+  a.p_delta = cells > 0 ? float(1 - hits / cells) : 1.0f;
+  a.hits = hits > 0 ? std::max(1, int(std::lround(hits))) : 0;
+  a.steps = 0;
+  a.color_pick = -1;
+  if (hits <= 0) {
+    a.n = k::kv3(0, 0, 1);
+    a.tangent = k::kv3(1, 0, 0);
+    a.position = k::kv3(f.x, f.y, 0);
+    return a;
+  }
+  const double inv = 1 / hits;
+  const double mx = sx * inv, my = sy * inv;
+  a.n = k::kv3_normalize(nsum);
+  a.tangent = k::kv3_normalize(tsum);
+  a.position = k::kv3(f.x, f.y, float(z * inv));
+  a.sxx = float(std::max(sxx * inv - mx * mx, 0.0));
+  a.syy = float(std::max(syy * inv - my * my, 0.0));
+  a.sxy = float(sxy * inv - mx * my);
+  a.layers = float(layers * inv);
+  for (float& w : a.color_w) w = float(w * inv);
+  // One cell's colour, chosen in proportion to its hits by the footprint's shift.
+  const float u = k::knit_frac(f.shift_x * 7 + f.shift_y * 3 + 0.5f) * float(hits);
+  for (int i = 0; i < npicks; ++i)
+    if (picks[size_t(i)].cum >= u || i == npicks - 1) {
+      a.color_pick = picks[size_t(i)].colour;
+      break;
+    }
+  return a;
+}
+
+float FootprintTable::p_delta(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
+  double cells = 0, hits = 0;
+  for_each_cell(surface, f, [&](int k, int c) {
+    cells += 1;
+    hits += lookup(cell_class(surface, k, c), wi).hit;
+  });
+  return cells > 0 ? float(1 - hits / cells) : 1.0f;
+}
+
+}  // namespace knit

@@ -1,0 +1,182 @@
+// The multi-scale class table (knit/aggregate_table.h): over footprints of
+// whole pattern repeats it must give what explicit tubes give (fraction of
+// rays passing through, mean normal, slope covariance), from both sides;
+// the colour histogram must follow the cells; and the material must use it
+// only for footprints of a cell or more.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "groundtruth.h"
+#include "knit/aggregate_table.h"
+#include "knit/kernel.h"
+#include "knit/shading.h"
+#include "test_patterns.h"
+
+namespace {
+
+using namespace knit;
+using namespace knit::test;
+
+double angle_between(const D3& a, const D3& b) {
+  const double d = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) /
+                   std::sqrt((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) * (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]));
+  return std::acos(std::clamp(d, -1.0, 1.0)) * 180 / kPiD;
+}
+
+TEST(FootprintTable, ClassesFollowCodeAndNeighbourSigns) {
+  KnitSurface st(stockinette(), StitchParams{});
+  EXPECT_EQ(FootprintTable::cell_class(st, 0, 0), 0);
+  KnitSurface rs(reverse_stockinette(), StitchParams{});
+  EXPECT_EQ(FootprintTable::cell_class(rs, 0, 0), 4 + 2 + 1);
+  // Garter: knit rows between purl rows take the purl signs for head and sinker.
+  KnitSurface ga(garter(), StitchParams{});
+  const int a = FootprintTable::cell_class(ga, 0, 0), b = FootprintTable::cell_class(ga, 1, 0);
+  EXPECT_NE(a, b);
+  EXPECT_TRUE((a == 3 && b == 4) || (a == 4 && b == 3)) << a << " " << b;
+  KnitSurface sl(slip_floats(), StitchParams{});
+  FootprintTable t(sl, CapmOptions{}, 8);
+  EXPECT_EQ(t.classes_present(), 3);  // knit, front float, back float
+}
+
+// Over a whole pattern repeat, seen from in front and from behind: p_delta,
+// mean normal and slope covariance against a dense grid of explicit-tube
+// rays over the same square (double precision, tests/support/groundtruth.h).
+TEST(FootprintTable, MatchesExplicitTubesOverFootprint) {
+  double worst_pd = 0, worst_n = 0;
+  for (const NamedPattern& np : groundtruth_patterns()) {
+    GroundTruthScene sc(np.pattern, StitchParams{}, 0, 45);
+    const FootprintTable table(sc.surface, CapmOptions{});
+    for (double th_deg : {0.0, 25.0, 40.0, 60.0, 70.0, 120.0, 150.0}) {
+      const double th = th_deg * kPiD / 180;
+      const D3 wi = {std::sin(th) * 0.8, std::sin(th) * 0.6, std::cos(th)};
+      const k::kvec3 wif = k::kv3(float(wi[0]), float(wi[1]), float(wi[2]));
+      const float size = float(sc.x1 - sc.x0);  // a whole pattern repeat (>= 4 stitches)
+      const float cx = float(0.5 * (sc.x0 + sc.x1)), cy = float(sc.y0 + 0.5 * size);
+      const k::KFootprint f =
+          k::knit_footprint(sc.surface.geom(), cx, cy, k::kv3(size, 0, 0), k::kv3(0, size, 0), 16, 0.3f, 0.6f);
+      ASSERT_EQ(f.stratified, 1);
+      const k::KnitAggregate a = table.aggregate(sc.surface, f, wif);
+      EXPECT_FLOAT_EQ(table.p_delta(sc.surface, f, wif), a.p_delta);
+      // Explicit tubes over the cells the footprint covers.
+      const double cw = 6.283185307179586, ch = sc.surface.geom().row_spacing;
+      const double x0 = f.bx0 * cw, y0 = f.by0 * ch, w = f.ncx * cw, h = f.ncy * ch;
+      int n = 0, through = 0, hits = 0;
+      double mx = 0, my = 0, mxx = 0, myy = 0;
+      D3 nsum = {0, 0, 0};
+      const int G = 72;
+      const double side = wi[2] < 0 ? -1 : 1;
+      for (int i = 0; i < G; ++i)
+        for (int j = 0; j < G; ++j) {
+          const double x = x0 + w * (i + 0.5) / G, y = y0 + h * (j + 0.5) / G;
+          D3 o, d;
+          sc.entry_ray(x, y, wi, o, d);
+          double tmax = sc.shell_exit(o, d);
+          if (d[2] > 0) {  // from behind: the ray crossed the shell from its bottom to (x, y, top)
+            tmax = 2 * sc.surface.shell_top() / d[2];
+            o = add(o, mul(d, -tmax));
+          }
+          const TubeHit th_ = sc.tubes.intersect(o, d, 0, tmax);
+          ++n;
+          if (!th_.hit) {
+            ++through;
+            continue;
+          }
+          const double nz = std::max(side * th_.normal[2], 1 / std::sqrt(17.0));  // slope clamp 4
+          const double bx = std::clamp(th_.normal[0] / nz, -4.0, 4.0), by = std::clamp(th_.normal[1] / nz, -4.0, 4.0);
+          mx += bx;
+          my += by;
+          mxx += bx * bx;
+          myy += by * by;
+          for (int c = 0; c < 3; ++c) nsum[c] += th_.normal[c];
+          ++hits;
+        }
+      const double pd = double(through) / n;
+      mx /= std::max(hits, 1);
+      my /= std::max(hits, 1);
+      const double sxx = mxx / std::max(hits, 1) - mx * mx, syy = myy / std::max(hits, 1) - my * my;
+      const double nerr = hits > 0 ? angle_between({a.n.x, a.n.y, a.n.z}, nsum) : 0;
+      std::printf("[ table ] %-20s %3.0f deg: p_delta table %.4f explicit %.4f | mean normal %.2f deg | "
+                  "slope var xx %.3f/%.3f yy %.3f/%.3f\n",
+                  np.name.c_str(), th_deg, a.p_delta, pd, nerr, a.sxx, sxx, a.syy, syy);
+      worst_pd = std::max(worst_pd, std::abs(a.p_delta - pd));
+      worst_n = std::max(worst_n, nerr);
+      EXPECT_NEAR(a.p_delta, pd, 0.03) << np.name << " " << th_deg;
+      EXPECT_LT(nerr, 3.0) << np.name << " " << th_deg;
+      EXPECT_NEAR(a.sxx, sxx, 0.2 * sxx + 0.05) << np.name << " " << th_deg;
+      EXPECT_NEAR(a.syy, syy, 0.2 * syy + 0.05) << np.name << " " << th_deg;
+    }
+  }
+  std::printf("[ table ] worst |p_delta - explicit| %.4f, worst mean-normal angle %.2f deg\n", worst_pd, worst_n);
+}
+
+// Colours: on the two-colour diamond blocks, the table's histogram over a
+// footprint against the marched aggregate's (64 points, many shifts), and
+// its mean layer count.
+TEST(FootprintTable, ColourHistogramFollowsTheCells) {
+  KnitSurface s(example("diamond_blocks_2colour"), StitchParams{});
+  const FootprintTable table(s, CapmOptions{});
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> U(0, 1);
+  double worst_c = 0, worst_l = 0;
+  for (int rep = 0; rep < 24; ++rep) {
+    const float size = 6.2831853f * (3 + 5 * U(rng));
+    const float x = 300 * U(rng), y = 216 * U(rng);
+    const float th = 1.2f * U(rng), ph = 6.2831853f * U(rng);
+    const k::kvec3 wi = k::kv3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
+    const k::KFootprint f = k::knit_footprint(s.geom(), x, y, k::kv3(size, 0, 0), k::kv3(0, size, 0), 64, 0.5f, 0.5f);
+    const k::KnitAggregate t = table.aggregate(s, f, wi);
+    double c1 = 0, layers = 0, hits = 0;
+    const int shifts = 16;
+    for (int i = 0; i < shifts; ++i) {
+      const k::KnitAggregate m = k::knit_aggregate(s.geom(), s.codes(), s.colors(), x, y, k::kv3(size, 0, 0),
+                                                   k::kv3(0, size, 0), wi, 64, U(rng), U(rng), 0, 0, 6.2832f, 32);
+      c1 += m.color_w[1] * m.hits;
+      layers += m.layers * m.hits;
+      hits += m.hits;
+    }
+    c1 /= hits;
+    layers /= hits;
+    worst_c = std::max(worst_c, std::abs(t.color_w[1] - c1));
+    worst_l = std::max(worst_l, std::abs(t.layers - layers));
+    EXPECT_NEAR(t.color_w[0] + t.color_w[1], 1.0, 1e-4);
+    EXPECT_NEAR(t.color_w[1], c1, 0.08) << "footprint " << rep;
+    EXPECT_NEAR(t.layers, layers, 0.15) << "footprint " << rep;
+  }
+  std::printf("[ table ] two colours: worst colour-weight difference %.3f, layers %.3f\n", worst_c, worst_l);
+}
+
+// The material uses the table for footprints of a cell or more and marches
+// smaller ones; footprint_table = false always marches.
+TEST(FootprintTable, MaterialUsesItOnlyForLargeFootprints) {
+  KnitMaterialParams mp;
+  mp.mode = KnitMode::MultiScale;
+  KnitMaterial with(seed(), mp);
+  mp.footprint_table = false;
+  KnitMaterial without(seed(), mp);
+  ASSERT_NE(with.footprint_table(), nullptr);
+  EXPECT_EQ(without.footprint_table(), nullptr);
+  EXPECT_GT(with.state_bytes(), without.state_bytes());
+  BaseHit hit;
+  hit.u = 0.31f;
+  hit.v = 0.47f;
+  const Vec3 dir = k::kv3_normalize(k::kv3(0.3f, 0.2f, -1.0f));
+  // Small footprint (a tenth of a stitch): both march, identically.
+  hit.dudx = hit.dvdy = 0.1f * 6.2831853f / mp.uv_scale;
+  const KnitShade a = with.shade(hit, dir, nullptr), b = without.shade(hit, dir, nullptr);
+  EXPECT_GT(a.steps, 0);
+  EXPECT_EQ(a.steps, b.steps);
+  EXPECT_EQ(a.point.p_delta, b.point.p_delta);
+  // Four stitches: the table (no marching), close to the marched aggregate.
+  hit.dudx = hit.dvdy = 4 * 6.2831853f / mp.uv_scale;
+  const KnitShade c = with.shade(hit, dir, nullptr), d = without.shade(hit, dir, nullptr);
+  EXPECT_EQ(c.steps, 0);
+  EXPECT_GT(d.steps, 0);
+  EXPECT_NEAR(c.point.p_delta, d.point.p_delta, 0.1);
+  EXPECT_NEAR(with.transmittance(hit, dir, nullptr), c.point.p_delta, 1e-6);
+}
+
+}  // namespace
