@@ -757,6 +757,28 @@ class KnitMaterialMultiScale(unittest.TestCase):
         np.testing.assert_array_equal(sh["p_delta"][~sh["pass_through"]], ag["p_delta"][~sh["pass_through"]])
         np.testing.assert_array_equal(sh["pass_through"], ag["hits"] == 0)
 
+    def test_footprints_of_cells_use_the_class_table(self):
+        # Footprints of a stitch cell or more: the class table (no marching)
+        # by default, the marched aggregate with footprint_table=False; the
+        # two agree on average.
+        marched = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0,
+                                         footprint_table=False)
+        n = 400
+        u, v = self.rng.uniform(0, 40, n), self.rng.uniform(0, 40, n)
+        wi = direction(35)
+        fp = [20.0, 0.0, 0.0, 18.0]
+        t = self.m.shade(u, v, -wi, footprint=fp, shift=[0.3, 0.7])
+        m = marched.shade(u, v, -wi, footprint=fp, shift=[0.3, 0.7])
+        self.assertTrue(np.all(t["steps"] == 0))
+        self.assertTrue(np.all(m["steps"] > 0))
+        ag = self.surf.aggregate(u, v, fp[:2], fp[2:], wi, 16, 0.3, 0.7)
+        np.testing.assert_array_equal(m["p_delta"], ag["p_delta"])
+        # One shift places every footprint's points alike; with random shifts
+        # the marched p_delta is unbiased, and the table's should match it.
+        m = marched.shade(u, v, -wi, footprint=fp, shift=self.rng.random((n, 2)))
+        sigma = m["p_delta"].std() / math.sqrt(n)
+        self.assertLess(abs(t["p_delta"].mean() - m["p_delta"].mean()), 4 * sigma + 0.01)
+
     def test_point_footprint_reduces_to_the_near_field(self):
         near = knitshade.KnitMaterial(seed_pattern(), self.stitch, uv_scale=1.0, ply_detail=False)
         n = 300
@@ -822,6 +844,8 @@ class KnitMaterialInterface(unittest.TestCase):
         self.assertAlmostEqual(m.shell_top, 1.0 + 0.6, places=5)
         d = knitshade.KnitMaterial(knitshade.Pattern())
         self.assertEqual((d.mode, d.capm, d.ply_detail, d.footprint_points), ("near_field", True, True, 16))
+        self.assertTrue(d.footprint_table)
+        self.assertFalse(knitshade.KnitMaterial(knitshade.Pattern(), footprint_table=False).footprint_table)
         self.assertAlmostEqual(d.uv_scale, 40.0)
         # bsdf and ply as dicts of keyword arguments
         m2 = knitshade.KnitMaterial(knitshade.Pattern(), bsdf=dict(eta=1.2), ply=dict(ply_count=2))
