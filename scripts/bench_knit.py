@@ -183,6 +183,20 @@ def main():
     b.results["garment_scarf"] = b.equal_quality("garment", scarf, scarf, "model", "explicit", ladder, ref_spp,
                                                  explicit_b=True)
 
+    # 1b, 2b. The same two scenes with the model in multi-scale mode (its
+    # far-field form: footprints of a stitch cell or more come from the class
+    # table), against the same explicit-yarn runs.
+    def multi_scale(scene):
+        s = json.loads(json.dumps(scene))
+        s["materials"]["wool"]["mode"] = "multi_scale"
+        return s
+    b.results["half_cylinder_multi_scale"] = b.equal_quality(
+        "half_cylinder_ms", multi_scale(hc), hc, "model_multi_scale", "explicit", ladder, ref_spp, explicit_b=True,
+        tag_b="half_cylinder_explicit")
+    b.results["garment_scarf_multi_scale"] = b.equal_quality(
+        "garment_ms", multi_scale(scarf), scarf, "model_multi_scale", "explicit", ladder, ref_spp, explicit_b=True,
+        tag_b="garment_explicit")
+
     # 3. Far view: multi-scale against near field (the flat swatch far away).
     far = sized(load("swatch_far.json"), size, int(size * 0.75))
     near = json.loads(json.dumps(far))
@@ -223,6 +237,10 @@ def main():
         "half_cylinder": b.overhead("oh_half_cylinder", hc, 16),
         "swatch_closeup": b.overhead("oh_swatch", sized(load("swatch_closeup.json"), size, size), 16),
         "scarf": b.overhead("oh_scarf", sized(load("scarf.json"), size, int(size * 1.2)), 16),
+        "half_cylinder_multi_scale": b.overhead("oh_half_cylinder_ms", multi_scale(hc), 16),
+        "swatch_far_multi_scale": b.overhead("oh_swatch_far", far, 16),
+        "scarf_multi_scale": b.overhead("oh_scarf_ms", multi_scale(sized(load("scarf.json"), size, int(size * 1.2))),
+                                        16),
     }
     b.results["finished"] = time.ctime()
     with open(os.path.join(b.out, "bench_knit.json"), "w") as f:
