@@ -25,6 +25,64 @@ Vec3 direction(int it, int ip) {
   return k::kv3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
 }
 
+
+// A weighted mix of hit-conditioned statistics (weights: share x hit
+// fraction); the tangents, lines rather than arrows, are sign-aligned.
+template <class S>
+class StatsMix {
+ public:
+  void add(const S& s, float w) {
+    if (!(w > 0)) return;
+    wsum_ += w;
+    acc_.nx += w * s.nx;
+    acc_.ny += w * s.ny;
+    acc_.nz += w * s.nz;
+    const Vec3 t = k::kv3_scale(k::kv3(s.tx, s.ty, s.tz), w);
+    tsum_ = k::kv3_dot(tsum_, t) < 0 ? k::kv3_sub(tsum_, t) : k::kv3_add(tsum_, t);
+    acc_.sx += w * s.sx;
+    acc_.sy += w * s.sy;
+    acc_.sxx += w * s.sxx;
+    acc_.sxy += w * s.sxy;
+    acc_.syy += w * s.syy;
+    acc_.layers += w * s.layers;
+    acc_.z += w * s.z;
+    for (int q = 0; q < 9; ++q) acc_.near[q] += w * s.near[q];
+  }
+  // The mix, with hit fraction `hit` (defaults when nothing was added).
+  S result(float hit) const {
+    S out;
+    out.hit = hit;
+    if (!(wsum_ > 0)) return out;
+    const float inv = 1 / wsum_;
+    out.nx = acc_.nx * inv;
+    out.ny = acc_.ny * inv;
+    out.nz = acc_.nz * inv;
+    const Vec3 t = k::kv3_normalize(tsum_);
+    out.tx = t.x;
+    out.ty = t.y;
+    out.tz = t.z;
+    out.sx = acc_.sx * inv;
+    out.sy = acc_.sy * inv;
+    out.sxx = acc_.sxx * inv;
+    out.sxy = acc_.sxy * inv;
+    out.syy = acc_.syy * inv;
+    out.layers = acc_.layers * inv;
+    out.z = acc_.z * inv;
+    for (int q = 0; q < 9; ++q) out.near[q] = acc_.near[q] * inv;
+    return out;
+  }
+
+ private:
+  S acc_ = zero();
+  Vec3 tsum_ = k::kv3(0, 0, 0);
+  float wsum_ = 0;
+  static S zero() {
+    S z;
+    z.nz = z.tx = 0;
+    return z;
+  }
+};
+
 }  // namespace
 
 int FootprintTable::cell_class(const KnitSurface& surface, int k, int c) {
@@ -109,34 +167,11 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
   for (int slot = 0; slot < slots; ++slot)
     for (int it : {0, kThetaBins - 1}) {
       Stats* row = &stats_[(size_t(slot) * kThetaBins + size_t(it)) * kPhiBins];
-      Stats avg;
-      avg.nz = avg.tx = 0;
       double hit = 0;
-      Vec3 tsum = k::kv3(0, 0, 0);
       for (int ip = 0; ip < kPhiBins; ++ip) hit += row[ip].hit;
-      for (int ip = 0; ip < kPhiBins; ++ip) {
-        const Stats& s = row[ip];
-        const float w = hit > 0 ? float(s.hit / hit) : 0.0f;
-        avg.nx += w * s.nx;
-        avg.ny += w * s.ny;
-        avg.nz += w * s.nz;
-        const Vec3 t = k::kv3_scale(k::kv3(s.tx, s.ty, s.tz), w);
-        tsum = k::kv3_dot(tsum, t) < 0 ? k::kv3_sub(tsum, t) : k::kv3_add(tsum, t);
-        avg.sx += w * s.sx;
-        avg.sy += w * s.sy;
-        avg.sxx += w * s.sxx;
-        avg.sxy += w * s.sxy;
-        avg.syy += w * s.syy;
-        avg.layers += w * s.layers;
-        avg.z += w * s.z;
-        for (int q = 0; q < 9; ++q) avg.near[q] += w * s.near[q];
-      }
-      avg.hit = float(hit / kPhiBins);
-      const Vec3 t = hit > 0 ? k::kv3_normalize(tsum) : k::kv3(1, 0, 0);
-      avg.tx = t.x;
-      avg.ty = t.y;
-      avg.tz = t.z;
-      if (hit <= 0) avg = Stats{};
+      StatsMix<Stats> mix;
+      for (int ip = 0; ip < kPhiBins; ++ip) mix.add(row[ip], row[ip].hit);
+      const Stats avg = mix.result(float(hit / kPhiBins));
       for (int ip = 0; ip < kPhiBins; ++ip) row[ip] = avg;
     }
 }
@@ -146,9 +181,8 @@ int FootprintTable::classes_present() const {
 }
 
 FootprintTable::Stats FootprintTable::lookup(int cls, Vec3 wi) const {
-  Stats out;
   const int slot = slot_[size_t(cls)];
-  if (slot < 0) return out;  // not in the pattern (cannot happen for its own cells)
+  if (slot < 0) return Stats{};  // not in the pattern (cannot happen for its own cells)
   const float th = std::acos(std::clamp(wi.z, -1.0f, 1.0f));
   float ph = std::atan2(wi.y, wi.x);
   if (ph < 0) ph += 2 * kPi;
@@ -161,50 +195,14 @@ FootprintTable::Stats FootprintTable::lookup(int cls, Vec3 wi) const {
   const int is[4] = {i0, i0, i1, i1}, js[4] = {j0, j1, j0, j1};
   const float ws[4] = {(1 - wt) * (1 - wp), (1 - wt) * wp, wt * (1 - wp), wt * wp};
   // Hit-conditioned means are interpolated with hit-weighted weights.
-  float hsum = 0, wsum = 0;
-  Stats acc;
-  acc.nz = acc.tx = 0;
-  Vec3 tsum = k::kv3(0, 0, 0);
+  float hit = 0;
+  StatsMix<Stats> mix;
   for (int q = 0; q < 4; ++q) {
     const Stats& s = stats_[(size_t(slot) * kThetaBins + size_t(is[q])) * kPhiBins + size_t(js[q])];
-    hsum += ws[q] * s.hit;
-    const float w = ws[q] * s.hit;
-    if (w <= 0) continue;
-    wsum += w;
-    acc.nx += w * s.nx;
-    acc.ny += w * s.ny;
-    acc.nz += w * s.nz;
-    const Vec3 t = k::kv3_scale(k::kv3(s.tx, s.ty, s.tz), w);
-    tsum = k::kv3_dot(tsum, t) < 0 ? k::kv3_sub(tsum, t) : k::kv3_add(tsum, t);
-    acc.sx += w * s.sx;
-    acc.sy += w * s.sy;
-    acc.sxx += w * s.sxx;
-    acc.sxy += w * s.sxy;
-    acc.syy += w * s.syy;
-    acc.layers += w * s.layers;
-    acc.z += w * s.z;
-    for (int i = 0; i < 9; ++i) acc.near[i] += w * s.near[i];
+    hit += ws[q] * s.hit;
+    mix.add(s, ws[q] * s.hit);
   }
-  out.hit = hsum;
-  if (wsum > 0) {
-    const float inv = 1 / wsum;
-    out.nx = acc.nx * inv;
-    out.ny = acc.ny * inv;
-    out.nz = acc.nz * inv;
-    const Vec3 t = k::kv3_normalize(tsum);
-    out.tx = t.x;
-    out.ty = t.y;
-    out.tz = t.z;
-    out.sx = acc.sx * inv;
-    out.sy = acc.sy * inv;
-    out.sxx = acc.sxx * inv;
-    out.sxy = acc.sxy * inv;
-    out.syy = acc.syy * inv;
-    out.layers = acc.layers * inv;
-    out.z = acc.z * inv;
-    for (int i = 0; i < 9; ++i) out.near[i] = acc.near[i] * inv;
-  }
-  return out;
+  return mix.result(hit);
 }
 
 template <class Visit>
