@@ -414,6 +414,24 @@ TEST(KnitVsExplicit, HalfCylinderFarView) {
   EXPECT_LT(c.blocks.rel_rmse, 0.3);
 }
 
+// The same in multi-scale mode: at 48x48 a pixel covers several stitches,
+// so every footprint comes from the class table (docs/multiscale.md).
+TEST(KnitVsExplicit, HalfCylinderFarViewMultiScale) {
+  const Comparison c = compare_model_and_explicit("half_cylinder_front.json", 48, 64, [](SceneDesc& d) {
+    front_and_back_light(d);
+    for (MaterialDesc& m : d.materials) {
+      if (m.type != MaterialType::Knit) continue;
+      knit::KnitMaterialParams p = m.knit.model->params();
+      p.mode = knit::KnitMode::MultiScale;
+      m.knit.model = std::make_shared<const knit::KnitMaterial>(m.knit.model->surface().pattern(), p);
+      ASSERT_NE(m.knit.model->footprint_table(), nullptr);
+    }
+  });
+  EXPECT_LT(std::fabs(c.pixels.rel_bias), 0.2);
+  EXPECT_LT(c.pixels.rel_mae, 0.3);
+  EXPECT_LT(c.blocks.rel_rmse, 0.3);
+}
+
 TEST(KnitVsExplicit, HalfCylinderCloseUp) {
   const Comparison c = compare_model_and_explicit("half_cylinder_closeup.json", 48, 256);
   EXPECT_LT(std::fabs(c.pixels.rel_bias), 0.2);
