@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <utility>
 
 namespace knit {
@@ -95,9 +96,24 @@ int FootprintTable::cell_class(const KnitSurface& surface, int k, int c) {
 
 FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& capm, int rays_per_direction) {
   const k::KnitGeom& g = surface.geom();
+  // The cells of each class; for large patterns a uniform sample of at most
+  // kMaxCells of them (reservoir sampling, fixed seed), enough for the rays
+  // of one direction and bounded in memory for a 4096 x 4096 pattern.
+  constexpr size_t kMaxCells = 1024;
   std::array<std::vector<std::pair<int, int>>, kClasses> cells;
+  std::array<size_t, kClasses> seen{};
+  std::mt19937 rng(12345);
   for (int k = 0; k < g.rows; ++k)
-    for (int c = 0; c < g.cols; ++c) cells[size_t(cell_class(surface, k, c))].emplace_back(k, c);
+    for (int c = 0; c < g.cols; ++c) {
+      const size_t cls = size_t(cell_class(surface, k, c));
+      const size_t n = seen[cls]++;
+      if (n < kMaxCells) {
+        cells[cls].emplace_back(k, c);
+      } else {
+        const size_t j = std::uniform_int_distribution<size_t>(0, n)(rng);
+        if (j < kMaxCells) cells[cls][j] = {k, c};
+      }
+    }
   int slots = 0;
   for (int i = 0; i < kClasses; ++i) slot_[size_t(i)] = cells[size_t(i)].empty() ? -1 : slots++;
   stats_.assign(size_t(slots) * kThetaBins * kPhiBins, Stats{});
