@@ -1107,7 +1107,8 @@ a dict of its keyword arguments (None: defaults). mode: 'near_field' (one
 CAPM ray) or 'multi_scale' (footprint aggregation, p_delta, LEAN-widened
 roughness, mixed colours). footprint_table: multi-scale footprints of a
 stitch cell or more are aggregated from a per-class table built here
-(docs/multiscale.md) instead of CAPM marches. capm=False: no parallax, the
+(docs/multiscale.md) instead of CAPM marches (not for patterns with slip
+stitches). capm=False: no parallax, the
 height query at the hit's (u, v). uv_scale: pattern units per UV unit. max_steps, max_segment,
 max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
   knit_material

@@ -93,7 +93,11 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
   for (int i = 0; i < 64; ++i)
     for (int j = 0; j < 16; ++j) g += ply_.lookup(6.2831853f * (i + 0.5f) / 64, 0.37f * float(j)).shadow;
   mean_shadow_ = params_.ply_detail ? float(g / (64 * 16)) : 1.0f;
-  if (params_.mode == KnitMode::MultiScale && params_.footprint_table)
+  // Not for slip stitches: their floats cross cell boundaries and blend
+  // with the loops beside them, which the classes do not describe (p_delta
+  // off by up to 0.075 on heel stitch, docs/multiscale.md); those patterns
+  // keep the marched aggregate.
+  if (params_.mode == KnitMode::MultiScale && params_.footprint_table && surface_.geom().has_floats == 0)
     table_ = std::make_shared<const FootprintTable>(surface_, params_.capm_options);
 }
 

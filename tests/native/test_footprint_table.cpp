@@ -150,7 +150,8 @@ TEST(FootprintTable, ColourHistogramFollowsTheCells) {
 }
 
 // The material uses the table for footprints of a cell or more and marches
-// smaller ones; footprint_table = false always marches.
+// smaller ones; footprint_table = false always marches, and so do patterns
+// with slip stitches.
 TEST(FootprintTable, MaterialUsesItOnlyForLargeFootprints) {
   KnitMaterialParams mp;
   mp.mode = KnitMode::MultiScale;
@@ -177,6 +178,11 @@ TEST(FootprintTable, MaterialUsesItOnlyForLargeFootprints) {
   EXPECT_GT(d.steps, 0);
   EXPECT_NEAR(c.point.p_delta, d.point.p_delta, 0.1);
   EXPECT_NEAR(with.transmittance(hit, dir, nullptr), c.point.p_delta, 1e-6);
+  // Slip-stitch floats cross cells: such patterns keep the marched aggregate.
+  mp.footprint_table = true;
+  KnitMaterial floats(slip_floats(), mp);
+  EXPECT_EQ(floats.footprint_table(), nullptr);
+  EXPECT_GT(floats.shade(hit, dir, nullptr).steps, 0);
 }
 
 }  // namespace
