@@ -127,6 +127,18 @@ k::KnitCapm KnitMaterial::march(const BaseHit& hit, Vec3 ray_dir, const FramePro
                                    k::kv3_neg(k::kv3_normalize(wi)), kx, ky, seg, o.max_steps);
 }
 
+int KnitMaterial::footprint_points_for(Vec3 fx, Vec3 fy) const {
+  // A footprint below a stitch cell gets the share of footprint_points its
+  // area covers, at least one point: the points of a tiny footprint would
+  // all march the same ray (the near-field limit). A cell or more: all of
+  // them (the kernel adds more for many cells).
+  const float cell = 6.28318531f * surface_.geom().row_spacing;
+  const float area = std::abs(fx.x * fy.y - fx.y * fy.x) / cell;
+  if (!(area < 1)) return params_.footprint_points;  // also NaN
+  // (the 1e-3 keeps an exact share from rounding up to one point more)
+  return std::clamp(int(std::ceil(float(params_.footprint_points) * area - 1e-3f)), 1, params_.footprint_points);
+}
+
 void KnitMaterial::mix_colors(KnitShade& sh, const float* weights) const {
   const YarnBsdfParams& bp = params_.bsdf;
   Rgb r{0, 0, 0}, t{0, 0, 0};
@@ -172,12 +184,12 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     // contributes its curvature there (pattern units).
     const Vec3 kap = frame ? frame->curvature(x, y) : k::kv3(hit.kx / S, hit.ky / S, 0);
     const Vec3 fx = k::kv3(us * hit.dudx, us * hit.dvdx, 0), fy = k::kv3(us * hit.dudy, us * hit.dvdy, 0);
-    const k::KFootprint f =
-        k::knit_footprint(surface_.geom(), x, y, fx, fy, params_.footprint_points, shift[0], shift[1]);
+    const int points = footprint_points_for(fx, fy);
+    const k::KFootprint f = k::knit_footprint(surface_.geom(), x, y, fx, fy, points, shift[0], shift[1]);
     const k::KnitAggregate a =
         table_ && f.stratified ? table_->aggregate(surface_, f, wi)
                                : k::knit_aggregate(surface_.geom(), surface_.codes(), surface_.colors(), x, y, fx, fy,
-                                                   wi, params_.footprint_points, shift[0], shift[1], kap.x, kap.y,
+                                                   wi, points, shift[0], shift[1], kap.x, kap.y,
                                                    params_.capm_options.max_segment, params_.capm_options.max_steps);
     sh.steps = int(a.steps * float(a.points) + 0.5f);
     if (a.hits == 0) {
@@ -302,9 +314,9 @@ float KnitMaterial::transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameP
     const float x = us * hit.u, y = us * hit.v;
     const Vec3 wi = k::kv3_neg(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n));
     const Vec3 kap = frame ? frame->curvature(x, y) : k::kv3(hit.kx / S, hit.ky / S, 0);
+    const Vec3 fx = k::kv3(us * hit.dudx, us * hit.dvdx, 0), fy = k::kv3(us * hit.dudy, us * hit.dvdy, 0);
     const k::KFootprint f =
-        k::knit_footprint(surface_.geom(), x, y, k::kv3(us * hit.dudx, us * hit.dvdx, 0),
-                          k::kv3(us * hit.dudy, us * hit.dvdy, 0), params_.footprint_points, shift[0], shift[1]);
+        k::knit_footprint(surface_.geom(), x, y, fx, fy, footprint_points_for(fx, fy), shift[0], shift[1]);
     if (table_ && f.stratified) return table_->p_delta(surface_, f, wi);
     return k::knit_footprint_p_delta(surface_.geom(), surface_.codes(), surface_.colors(), f, wi, kap.x, kap.y,
                                      params_.capm_options.max_segment, params_.capm_options.max_steps);

@@ -185,4 +185,23 @@ TEST(FootprintTable, MaterialUsesItOnlyForLargeFootprints) {
   EXPECT_GT(floats.shade(hit, dir, nullptr).steps, 0);
 }
 
+// Below a stitch cell a footprint gets the share of footprint_points its
+// area covers (at least one): seen straight down every point is one CAPM
+// segment, so the segments count the points.
+TEST(FootprintTable, FootprintsBelowACellMarchPointsInProportionToTheirArea) {
+  KnitMaterialParams mp;
+  mp.mode = KnitMode::MultiScale;
+  KnitMaterial m(seed(), mp);
+  const float cell = 6.2831853f * m.surface().geom().row_spacing;
+  BaseHit hit;
+  hit.u = 0.31f;
+  hit.v = 0.47f;
+  const Vec3 down = k::kv3(0, 0, -1);
+  for (const auto& [area, points] : std::vector<std::pair<float, int>>{{0.0f, 1}, {1e-4f, 1}, {0.25f, 4}, {0.5f, 8},
+                                                                      {0.99f, 16}}) {
+    hit.dudx = hit.dvdy = std::sqrt(area * cell) / mp.uv_scale;
+    EXPECT_EQ(m.shade(hit, down, nullptr).steps, points) << "footprint of " << area << " cells";
+  }
+}
+
 }  // namespace

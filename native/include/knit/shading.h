@@ -31,7 +31,7 @@ struct KnitMaterialParams {
   bool ply_detail = true;       // wrap the ply/fibre profile around the yarn
   KnitMode mode = KnitMode::NearField;
   bool capm = true;             // false: no parallax, the height query at the hit's (u, v)
-  int footprint_points = 16;    // multi-scale Sobol' points (docs/multiscale.md)
+  int footprint_points = 16;    // multi-scale Sobol' points per cell-sized footprint (docs/multiscale.md)
   bool footprint_table = true;  // multi-scale footprints of a cell or more: the class table, not marches
   float uv_scale = 40.0f;       // pattern units per UV unit (x = uv_scale u, y = uv_scale v)
   CapmOptions capm_options;
@@ -93,6 +93,8 @@ class KnitMaterial {
 
  private:
   k::KnitCapm march(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame) const;
+  // Points marched over a footprint spanned by fx, fy (pattern units).
+  int footprint_points_for(Vec3 fx, Vec3 fy) const;
   void set_colors(KnitShade& sh, int color_index) const;
   // Palette mixed by a footprint's colour histogram (KNIT_MS_COLORS bins).
   void mix_colors(KnitShade& sh, const float* weights) const;
