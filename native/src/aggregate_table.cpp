@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <random>
 #include <utility>
 
@@ -224,7 +225,7 @@ FootprintTable::Stats FootprintTable::lookup(int cls, Vec3 wi) const {
 template <class Visit>
 void FootprintTable::for_each_cell(const KnitSurface& surface, const k::KFootprint& f, Visit&& visit) const {
   const k::KnitGeom& g = surface.geom();
-  if (f.ncx * f.ncy <= KNIT_MS_MAX_POINTS) {
+  if (int64_t(f.ncx) * int64_t(f.ncy) <= KNIT_MS_MAX_POINTS) {  // up to 1e5 x 1e5 cells: no int product
     for (int cy = 0; cy < f.ncy; ++cy)
       for (int cx = 0; cx < f.ncx; ++cx) visit(f.by0 + cy, f.bx0 + cx);
     return;

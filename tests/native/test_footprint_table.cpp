@@ -185,6 +185,23 @@ TEST(FootprintTable, MaterialUsesItOnlyForLargeFootprints) {
   EXPECT_GT(floats.shade(hit, dir, nullptr).steps, 0);
 }
 
+// Grazing rays have huge ray differentials (clamped to 1e5 cells per axis by
+// knit_footprint): the table then reads the cells of the footprint's points,
+// never the 1e10 cells of its box, and stays finite.
+TEST(FootprintTable, HugeFootprintsStayBounded) {
+  KnitSurface s(seed(), StitchParams{});
+  const FootprintTable table(s, CapmOptions{}, 16);
+  const k::kvec3 wi = k::kv3(0, 0, 1);
+  for (float size : {1e3f, 1e6f, 1e30f, INFINITY}) {
+    const k::KFootprint f = k::knit_footprint(s.geom(), 3.0f, 2.0f, k::kv3(size, 0, 0), k::kv3(0, size, 0), 16, 0.3f, 0.6f);
+    const k::KnitAggregate a = table.aggregate(s, f, wi);
+    EXPECT_LE(a.points, KNIT_MS_MAX_POINTS) << size;
+    EXPECT_TRUE(std::isfinite(a.p_delta) && a.p_delta > 0 && a.p_delta < 1) << size << ": " << a.p_delta;
+    EXPECT_TRUE(std::isfinite(a.n.x) && std::isfinite(a.n.y) && std::isfinite(a.n.z)) << size;
+    EXPECT_FLOAT_EQ(table.p_delta(s, f, wi), a.p_delta) << size;
+  }
+}
+
 // Below a stitch cell a footprint gets the share of footprint_points its
 // area covers (at least one): seen straight down every point is one CAPM
 // segment, so the segments count the points.
