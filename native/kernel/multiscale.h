@@ -58,6 +58,14 @@ KNIT_STRUCT(KnitAggregate)
   kvec3 position;   /* mean hit position (pattern space) */
 KNIT_STRUCT_END(KnitAggregate)
 
+/* Slopes (n.x/n.z, n.y/n.z) of a hit normal n seen from side (+1 front, -1
+ * behind: against -z), clamped at KNIT_MS_MAX_SLOPE (KZ unused). */
+KNIT_FN kvec3 knit_ms_slopes(kvec3 n, float side) {
+  float nz = k_fmax(side * KZ(n), KF(1.0) / k_sqrt(KF(1.0) + KNIT_MS_MAX_SLOPE * KNIT_MS_MAX_SLOPE));
+  return kv3(k_clampf(KX(n) / nz, -KNIT_MS_MAX_SLOPE, KNIT_MS_MAX_SLOPE),
+             k_clampf(KY(n) / nz, -KNIT_MS_MAX_SLOPE, KNIT_MS_MAX_SLOPE), KF(0.0));
+}
+
 /* Point i of the 2D Sobol' sequence in [0,1)^2, 24-bit: the first dimension
  * is the base-2 radical inverse, the second uses Sobol's direction numbers
  * v_k = v_{k-1} xor (v_{k-1} >> 1). KZ is unused. */
@@ -187,9 +195,8 @@ KNIT_FN KnitAggregate knit_aggregate(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes)
     if (st.state == KNIT_CAPM_HIT) {
       kvec3 nn = st.hit.n;
       kvec3 tt = st.hit.tangent;
-      float nz = k_fmax(side * KZ(nn), KF(1.0) / k_sqrt(KF(1.0) + KNIT_MS_MAX_SLOPE * KNIT_MS_MAX_SLOPE));
-      float bx = k_clampf(KX(nn) / nz, -KNIT_MS_MAX_SLOPE, KNIT_MS_MAX_SLOPE);
-      float by = k_clampf(KY(nn) / nz, -KNIT_MS_MAX_SLOPE, KNIT_MS_MAX_SLOPE);
+      kvec3 sl = knit_ms_slopes(nn, side);
+      float bx = KX(sl), by = KY(sl);
       int ci = k_mini(k_maxi(st.hit.colour, 0), KNIT_MS_COLORS - 1);
       a.hits = a.hits + 1;
       if (a.color_pick < 0 || i <= pick) a.color_pick = st.hit.colour;

@@ -247,23 +247,16 @@ KNIT_FN KnitLineHit knit_crossing(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), K
 /* Candidate pieces a FIRST query can order; more are processed unordered. */
 #define KNIT_QUERY_MAX_CAND 48
 
-/* Curve parameter of the point of piece gp's quadratic interpolant closest
- * to the line (o, D) (gp in the centre column of span sp), or K_BIG when
- * the interpolant stays farther than m from the line. */
-KNIT_FN float knit_piece_quad_t(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KSpan) sp, int gp,
-                                kvec3 o, kvec3 D, float m) {
+/* Curve parameter of the point of span sp's row closest to the line (o, D)
+ * found from piece gp of the span's centre column (quadratic interpolant,
+ * cubic, one Newton step on the exact curve), or K_BIG when the interpolant
+ * stays farther than m from the line. */
+KNIT_FN float knit_piece_closest_t(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KSpan) sp, int gp,
+                                   kvec3 o, kvec3 D, float m) {
   KQuad q = knit_span_piece_quad(g, codes, sp, gp);
   kvec3 cu = knit_quad_closest(q, o, D);
   if (KY(cu) > m * m) return K_BIG;
-  return q.t0 + KX(cu) * KNIT_PIECE_LEN;
-}
-
-/* The same moved to the exact curve's closest point by a Newton step. */
-KNIT_FN float knit_piece_closest_t(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KSpan) sp, int gp,
-                                   kvec3 o, kvec3 D, float m) {
-  float t = knit_piece_quad_t(g, codes, sp, gp, o, D, m);
-  if (t == K_BIG) return K_BIG;
-  return knit_newton_closest(g, codes, sp, o, D, t, KNIT_NEWTON_CLOSEST);
+  return knit_newton_closest(g, codes, sp, o, D, q.t0 + KX(cu) * KNIT_PIECE_LEN, KNIT_NEWTON_CLOSEST);
 }
 
 /* First tube entry along o + s D with s in [s_min, s_max] (D unit), and the

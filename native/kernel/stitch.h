@@ -260,18 +260,25 @@ KNIT_FN KCurve knit_blend_curve(KNIT_IN(KnitGeom) g, KNIT_IN(KCurve) self, KNIT_
   return out;
 }
 
+/* The curve at t in column c (centre tc), whose cell is cl, next to column
+ * nc (c itself, or the neighbour t is within the blend half-width of, see
+ * knit_blend_side) whose cell is ncl. */
+KNIT_FN KCurve knit_cells_curve(KNIT_IN(KnitGeom) g, KNIT_IN(KCell) cl, KNIT_IN(KCell) ncl, int c, int nc,
+                                float tc, float t, float yk) {
+  KCurve self = knit_profile(g, cl.code, cl.sg, t - tc, tc, yk);
+  if (nc == c || knit_same_profile(cl, ncl)) return self;
+  return knit_blend_curve(g, self, ncl, c, nc, t, yk);
+}
+
 /* The exact yarn curve of a row at global parameter t (see the file header). */
 KNIT_FN KCurve knit_row_curve_at(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, float t) {
   int c = knit_column_of(t);
   float tc = K_2PI * KFLT(c) + K_PI;
-  KCell cl = knit_cell(g, codes, rw, c);
-  KCurve self = knit_profile(g, cl.code, cl.sg, t - tc, tc, rw.yk);
   int nc = c + knit_blend_side(t - tc);
-  KCell ncl;
-  if (nc == c) return self;
-  ncl = knit_cell(g, codes, rw, nc);
-  if (knit_same_profile(cl, ncl)) return self;
-  return knit_blend_curve(g, self, ncl, c, nc, t, rw.yk);
+  KCell cl = knit_cell(g, codes, rw, c);
+  KCell ncl = cl;
+  if (nc != c) ncl = knit_cell(g, codes, rw, nc);
+  return knit_cells_curve(g, cl, ncl, c, nc, tc, t, rw.yk);
 }
 
 /* The same through a span's cells (knit_span): t should lie within a column
@@ -280,15 +287,8 @@ KNIT_FN KCurve knit_span_curve_at(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), K
   int c = knit_column_of(t);
   float tc = K_2PI * KFLT(c) + K_PI;
   int nc = c + knit_blend_side(t - tc);
-  KCell cl, ncl;
-  KCurve self;
   if (knit_span_covers(sp, c) == 0 || knit_span_covers(sp, nc) == 0) return knit_row_curve_at(g, codes, sp.rw, t);
-  cl = knit_span_cell(sp, c);
-  self = knit_profile(g, cl.code, cl.sg, t - tc, tc, sp.rw.yk);
-  if (nc == c) return self;
-  ncl = knit_span_cell(sp, nc);
-  if (knit_same_profile(cl, ncl)) return self;
-  return knit_blend_curve(g, self, ncl, c, nc, t, sp.rw.yk);
+  return knit_cells_curve(g, knit_span_cell(sp, c), knit_span_cell(sp, nc), c, nc, tc, t, sp.rw.yk);
 }
 
 KNIT_FN KCurve knit_row_curve(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), int k, float t) {
