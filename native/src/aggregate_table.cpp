@@ -14,13 +14,6 @@ namespace {
 
 constexpr float kPi = 3.14159265358979f;
 
-// Slopes of a hit normal as knit_aggregate takes them (multiscale.h).
-void slopes(Vec3 n, float side, float& bx, float& by) {
-  const float nz = std::max(side * n.z, 1.0f / std::sqrt(1.0f + KNIT_MS_MAX_SLOPE * KNIT_MS_MAX_SLOPE));
-  bx = std::clamp(n.x / nz, -KNIT_MS_MAX_SLOPE, KNIT_MS_MAX_SLOPE);
-  by = std::clamp(n.y / nz, -KNIT_MS_MAX_SLOPE, KNIT_MS_MAX_SLOPE);
-}
-
 Vec3 direction(int it, int ip) {
   const float th = float(it) * kPi / float(FootprintTable::kThetaBins - 1);
   const float ph = float(ip) * 2 * kPi / float(FootprintTable::kPhiBins);
@@ -134,7 +127,7 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
         // spreads them), the point inside the cell from a (0,2)-net.
         const std::pair<int, int>& cell = list[(size_t(m) * 7919u) % list.size()];
         const Vec3 q = k::knit_sobol2((it * kPhiBins + ip) * m_rays + m);  // other points per direction
-        const float x = (float(cell.second) + k::knit_frac(q.x + 0.5f)) * 6.28318531f;
+        const float x = (float(cell.second) + k::knit_frac(q.x + 0.5f)) * K_2PI;
         const float y = (float(cell.first) + k::knit_frac(q.y + 0.5f)) * g.row_spacing;
         const k::KnitCapm st = k::knit_capm_curved(g, surface.codes(), surface.colors(), x, y, wi, 0, 0,
                                                    capm.max_segment, capm.max_steps);
@@ -145,8 +138,8 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
         n[2] += st.hit.n.z;
         tsum = k::kv3_dot(tsum, st.hit.tangent) < 0 ? k::kv3_sub(tsum, st.hit.tangent)
                                                      : k::kv3_add(tsum, st.hit.tangent);
-        float bx, by;
-        slopes(st.hit.n, side, bx, by);
+        const Vec3 sl = k::knit_ms_slopes(st.hit.n, side);  // as knit_aggregate takes them
+        const float bx = sl.x, by = sl.y;
         sx += bx;
         sy += by;
         sxx += double(bx) * bx;
@@ -232,15 +225,15 @@ void FootprintTable::for_each_cell(const KnitSurface& surface, const k::KFootpri
   }
   for (int i = 0; i < f.n; ++i) {
     const Vec3 p = k::knit_footprint_point(g, f, i);
-    visit(int(std::floor(p.y / g.row_spacing)), int(std::floor(p.x / 6.28318531f)));
+    visit(int(std::floor(p.y / g.row_spacing)), int(std::floor(p.x / K_2PI)));
   }
 }
 
 k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
   const k::KnitGeom& g = surface.geom();
   k::KnitAggregate a{};
-  double cells = 0, hits = 0, sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0, layers = 0, z = 0;
-  Vec3 nsum = k::kv3(0, 0, 0), tsum = k::kv3(0, 0, 0);
+  double cells = 0, hits = 0;
+  StatsMix<Stats> mix;
   struct Pick {
     int colour;
     float cum;
@@ -253,16 +246,7 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
     if (s.hit <= 0) return;
     const float w = s.hit;
     hits += w;
-    nsum = k::kv3_madd(nsum, k::kv3(s.nx, s.ny, s.nz), w);
-    const Vec3 t = k::kv3_scale(k::kv3(s.tx, s.ty, s.tz), w);
-    tsum = k::kv3_dot(tsum, t) < 0 ? k::kv3_sub(tsum, t) : k::kv3_add(tsum, t);
-    sx += w * s.sx;
-    sy += w * s.sy;
-    sxx += w * s.sxx;
-    sxy += w * s.sxy;
-    syy += w * s.syy;
-    layers += w * s.layers;
-    z += w * s.z;
+    mix.add(s, w);
     // Colours of the yarns hit: the 3 x 3 block around the cell, by share.
     int colour = -1;
     float share = -1;
@@ -290,15 +274,16 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
     a.position = k::kv3(f.x, f.y, 0);
     return a;
   }
+  // The hit-weighted means over the cells; the covariance about the mean slope.
+  const Stats m = mix.result(float(hits / cells));
   const double inv = 1 / hits;
-  const double mx = sx * inv, my = sy * inv;
-  a.n = k::kv3_normalize(nsum);
-  a.tangent = k::kv3_normalize(tsum);
-  a.position = k::kv3(f.x, f.y, float(z * inv));
-  a.sxx = float(std::max(sxx * inv - mx * mx, 0.0));
-  a.syy = float(std::max(syy * inv - my * my, 0.0));
-  a.sxy = float(sxy * inv - mx * my);
-  a.layers = float(layers * inv);
+  a.n = k::kv3_normalize(k::kv3(m.nx, m.ny, m.nz));
+  a.tangent = k::kv3(m.tx, m.ty, m.tz);
+  a.position = k::kv3(f.x, f.y, m.z);
+  a.sxx = std::max(m.sxx - m.sx * m.sx, 0.0f);
+  a.syy = std::max(m.syy - m.sy * m.sy, 0.0f);
+  a.sxy = m.sxy - m.sx * m.sy;
+  a.layers = m.layers;
   for (float& w : a.color_w) w = float(w * inv);
   // One cell's colour, chosen in proportion to its hits by the footprint's shift.
   const float u = k::knit_frac(f.shift_x * 7 + f.shift_y * 3 + 0.5f) * float(hits);

@@ -132,7 +132,7 @@ int KnitMaterial::footprint_points_for(Vec3 fx, Vec3 fy) const {
   // area covers, at least one point: the points of a tiny footprint would
   // all march the same ray (the near-field limit). A cell or more: all of
   // them (the kernel adds more for many cells).
-  const float cell = 6.28318531f * surface_.geom().row_spacing;
+  const float cell = K_2PI * surface_.geom().row_spacing;
   const float area = std::abs(fx.x * fy.y - fx.y * fy.x) / cell;
   if (!(area < 1)) return params_.footprint_points;  // also NaN
   // (the 1e-3 keeps an exact share from rounding up to one point more)
