@@ -16,7 +16,15 @@ summary) to OUT_DIR.
   overhead        the knit model against a plain diffuse material of the same
                   colour on the same mesh and lights, same samples.
 
-  /usr/bin/python3 scripts/bench_knit.py BUILD_DIR OUT_DIR [--quick] [--paper-far-view]
+  /usr/bin/python3 scripts/bench_knit.py BUILD_DIR OUT_DIR [--quick] [--paper-far-view] [--only PARTS]
+
+PARTS: comma-separated, of half_cylinder, garment, far_view, overhead (all
+by default; --paper-far-view adds the environment-only far views).
+
+On the garment (the scarf over a bar, on a floor) the error is measured twice:
+over the whole image, where the floor and bar's lighting noise (the same for
+every method) dominates, and over the fabric alone (pixels the scarf covers at
+least half of, from `knitshade render --mask-object scarf`).
 """
 import json
 import math
@@ -73,32 +81,52 @@ class Bench:
         with open(rep) as f:
             return img, json.load(f)
 
-    def compare(self, a, b):
-        r = subprocess.run([self.cli, "compare", a, b], check=True, capture_output=True, text=True)
+    def compare(self, a, b, mask=None):
+        cmd = [self.cli, "compare", a, b] + (["--mask", mask] if mask else [])
+        r = subprocess.run(cmd, check=True, capture_output=True, text=True)
         return json.loads(r.stdout)
 
-    def convergence(self, tag, scene, ladder, ref_spp, explicit=False):
-        """Render time and RMSE against the method's own reference along the ladder (cached by tag)."""
-        if not hasattr(self, "_conv"):
-            self._conv = {}
-        if tag in self._conv:
-            return self._conv[tag]
-        ref, ref_rep = self.render(tag + "_ref", scene, ref_spp, seed=1000, explicit=explicit)
+    def mask(self, tag, scene, obj):
+        """Coverage mask of object `obj` (knitshade render --mask-object), for errors over the fabric alone."""
+        path = os.path.join(self.out, tag + ".json")
+        with open(path, "w") as f:
+            json.dump(scene, f, indent=1)
+        img = os.path.join(self.out, tag + "_mask.exr")
+        subprocess.run([self.cli, "render", path, "-o", img, "--spp", "64", "--quiet", "--mask-object", obj],
+                       check=True)
+        return img
+
+    def convergence(self, tag, scene, ladder, ref_spp, explicit=False, mask=None):
+        """Render time and RMSE against the method's own reference along the ladder. The renders are
+        cached by tag; the errors by tag and mask (RMSE over the pixels the mask selects)."""
+        if not hasattr(self, "_renders"):
+            self._renders, self._conv = {}, {}
+        if tag not in self._renders:
+            ref, ref_rep = self.render(tag + "_ref", scene, ref_spp, seed=1000, explicit=explicit)
+            imgs = []
+            for spp in ladder:
+                img, rep = self.render(tag, scene, spp, seed=1, explicit=explicit)
+                imgs.append((spp, img, rep["seconds"]["render"]))
+            self._renders[tag] = (ref, ref_rep, imgs)
+        key = (tag, mask)
+        if key in self._conv:
+            return self._conv[key]
+        ref, ref_rep, imgs = self._renders[tag]
         points = []
-        for spp in ladder:
-            img, rep = self.render(tag, scene, spp, seed=1, explicit=explicit)
-            c = self.compare(img, ref)
-            points.append({"spp": spp, "seconds": rep["seconds"]["render"], "rmse": c["rmse"], "mean": c["mean_a"]})
-            print(f"  {tag}: {spp:5d} spp  {rep['seconds']['render']:8.3f} s  RMSE {c['rmse']:.5f}", flush=True)
+        for spp, img, seconds in imgs:
+            c = self.compare(img, ref, mask)
+            points.append({"spp": spp, "seconds": seconds, "rmse": c["rmse"], "mean": c["mean_a"]})
+            print(f"  {tag}{' (masked)' if mask else ''}: {spp:5d} spp  {seconds:8.3f} s  RMSE {c['rmse']:.5f}",
+                  flush=True)
         # The reference's own noise: RMSE(1 spp) / sqrt(ref_spp), removed in quadrature.
         e1 = points[0]["rmse"] * math.sqrt(points[0]["spp"])
         ref_noise = e1 / math.sqrt(ref_spp)
         for p in points:
             p["rmse_corrected"] = math.sqrt(max(p["rmse"] ** 2 - ref_noise ** 2, 1e-30))
-        self._conv[tag] = {"reference": ref, "reference_spp": ref_spp,
+        self._conv[key] = {"reference": ref, "reference_spp": ref_spp,
                            "reference_seconds": ref_rep["seconds"]["render"], "reference_noise": ref_noise,
                            "points": points, "report": ref_rep}
-        return self._conv[tag]
+        return self._conv[key]
 
     @staticmethod
     def time_to_error(conv, target):
@@ -114,10 +142,10 @@ class Bench:
         return p["seconds"] * (p["rmse_corrected"] / target) ** 2
 
     def equal_quality(self, name, scene_a, scene_b, label_a, label_b, ladder, ref_spp, explicit_b=False,
-                      tag_a=None, tag_b=None):
+                      tag_a=None, tag_b=None, mask=None):
         print(f"equal quality: {name}", flush=True)
-        a = self.convergence(tag_a or f"{name}_{label_a}", scene_a, ladder, ref_spp)
-        b = self.convergence(tag_b or f"{name}_{label_b}", scene_b, ladder, ref_spp, explicit=explicit_b)
+        a = self.convergence(tag_a or f"{name}_{label_a}", scene_a, ladder, ref_spp, mask=mask)
+        b = self.convergence(tag_b or f"{name}_{label_b}", scene_b, ladder, ref_spp, explicit=explicit_b, mask=mask)
         # Target: the error method A reaches at the middle of the ladder, if B reaches it too.
         mid = a["points"][len(ladder) // 2]["rmse_corrected"]
         target = max(mid, b["points"][-1]["rmse_corrected"])
@@ -133,7 +161,9 @@ class Bench:
         res["memory"] = {label_a: ma, label_b: mb}
         res["knit"] = {label_a: a["report"]["knit"], label_b: b["report"]["knit"]}
         # The converged images against each other (the model's error, not noise).
-        res["references_compared"] = self.compare(a["reference"], b["reference"])
+        res["references_compared"] = self.compare(a["reference"], b["reference"], mask)
+        if mask:
+            res["mask"] = mask
         print(f"  -> target RMSE {target:.5f}: {label_a} {ta:.2f} s, {label_b} {tb:.2f} s, "
               f"{label_b}/{label_a} = {tb / ta:.2f}", flush=True)
         return res
@@ -167,6 +197,9 @@ def main():
         sys.exit(2)
     quick = "--quick" in sys.argv
     b = Bench(sys.argv[1], sys.argv[2], quick)
+    parts = {"half_cylinder", "garment", "far_view", "overhead"}
+    if "--only" in sys.argv:
+        parts = set(sys.argv[sys.argv.index("--only") + 1].split(","))
     size = 64 if quick else 128
     ladder = [1, 2, 4, 8, 16] if quick else [1, 2, 4, 8, 16, 32, 64]
     ref_spp = 128 if quick else 1024
@@ -174,14 +207,16 @@ def main():
     # 1. The half cylinder of Figure 7 (200 yarns), far view, front and back light.
     hc = sized(load("half_cylinder_front.json"), size, size)
     hc["lights"].append({"type": "directional", "to_light": [-0.25, 0.3, -1], "irradiance": [2.4, 2.35, 2.3]})
-    b.results["half_cylinder"] = b.equal_quality("half_cylinder", hc, hc, "model", "explicit", ladder, ref_spp,
-                                                 explicit_b=True)
+    if "half_cylinder" in parts:
+        b.results["half_cylinder"] = b.equal_quality("half_cylinder", hc, hc, "model", "explicit", ladder, ref_spp,
+                                                     explicit_b=True)
 
     # 2. A garment: the scarf at a real gauge (125 stitches across 25 cm, 1400 rows over 2 m).
     scarf = sized(load("scarf.json"), size, int(size * 1.2))
     scarf["materials"]["wool"]["uv_scale"] = 3142
-    b.results["garment_scarf"] = b.equal_quality("garment", scarf, scarf, "model", "explicit", ladder, ref_spp,
-                                                 explicit_b=True)
+    if "garment" in parts:
+        b.results["garment_scarf"] = b.equal_quality("garment", scarf, scarf, "model", "explicit", ladder, ref_spp,
+                                                     explicit_b=True)
 
     # 1b, 2b. The same two scenes with the model in multi-scale mode (its
     # far-field form: footprints of a stitch cell or more come from the class
@@ -190,23 +225,34 @@ def main():
         s = json.loads(json.dumps(scene))
         s["materials"]["wool"]["mode"] = "multi_scale"
         return s
-    b.results["half_cylinder_multi_scale"] = b.equal_quality(
-        "half_cylinder_ms", multi_scale(hc), hc, "model_multi_scale", "explicit", ladder, ref_spp, explicit_b=True,
-        tag_b="half_cylinder_explicit")
-    b.results["garment_scarf_multi_scale"] = b.equal_quality(
-        "garment_ms", multi_scale(scarf), scarf, "model_multi_scale", "explicit", ladder, ref_spp, explicit_b=True,
-        tag_b="garment_explicit")
+    if "half_cylinder" in parts:
+        b.results["half_cylinder_multi_scale"] = b.equal_quality(
+            "half_cylinder_ms", multi_scale(hc), hc, "model_multi_scale", "explicit", ladder, ref_spp,
+            explicit_b=True, tag_b="half_cylinder_explicit")
+    if "garment" in parts:
+        b.results["garment_scarf_multi_scale"] = b.equal_quality(
+            "garment_ms", multi_scale(scarf), scarf, "model_multi_scale", "explicit", ladder, ref_spp,
+            explicit_b=True, tag_b="garment_explicit")
+        # The same renders, the error over the fabric alone.
+        fabric = b.mask("garment_fabric", scarf, "scarf")
+        b.results["garment_scarf_fabric"] = b.equal_quality(
+            "garment_fabric", scarf, scarf, "model", "explicit", ladder, ref_spp, explicit_b=True,
+            tag_a="garment_model", tag_b="garment_explicit", mask=fabric)
+        b.results["garment_scarf_multi_scale_fabric"] = b.equal_quality(
+            "garment_ms_fabric", multi_scale(scarf), scarf, "model_multi_scale", "explicit", ladder, ref_spp,
+            explicit_b=True, tag_a="garment_ms_model_multi_scale", tag_b="garment_explicit", mask=fabric)
 
     # 3. Far view: multi-scale against near field (the flat swatch far away).
     far = sized(load("swatch_far.json"), size, int(size * 0.75))
     near = json.loads(json.dumps(far))
     near["materials"]["wool"]["mode"] = "near_field"
-    b.results["far_view"] = b.equal_quality("far_view", far, near, "multi_scale", "near_field", ladder, ref_spp,
-                                            tag_b="far_near_field")
     far4 = json.loads(json.dumps(far))
     far4["materials"]["wool"]["footprint_points"] = 4
-    b.results["far_view_4_points"] = b.equal_quality("far_view4", far4, near, "multi_scale", "near_field", ladder,
-                                                     ref_spp, tag_b="far_near_field")
+    if "far_view" in parts:
+        b.results["far_view"] = b.equal_quality("far_view", far, near, "multi_scale", "near_field", ladder,
+                                                ref_spp, tag_b="far_near_field")
+        b.results["far_view_4_points"] = b.equal_quality("far_view4", far4, near, "multi_scale", "near_field",
+                                                         ladder, ref_spp, tag_b="far_near_field")
 
     # 3b. (--paper-far-view, about 15 more minutes) The same under environment
     # light only, as in the paper's Figure 13, with the seed pattern and with
@@ -233,15 +279,16 @@ def main():
                 "far4_" + name, ms4, nf, "multi_scale", "near_field", ladder, ref_spp, tag_b="far_nf_" + name)
 
     # 4. Overhead of the knit material against diffuse, same mesh, lights and samples.
-    b.results["overhead"] = {
-        "half_cylinder": b.overhead("oh_half_cylinder", hc, 16),
-        "swatch_closeup": b.overhead("oh_swatch", sized(load("swatch_closeup.json"), size, size), 16),
-        "scarf": b.overhead("oh_scarf", sized(load("scarf.json"), size, int(size * 1.2)), 16),
-        "half_cylinder_multi_scale": b.overhead("oh_half_cylinder_ms", multi_scale(hc), 16),
-        "swatch_far_multi_scale": b.overhead("oh_swatch_far", far, 16),
-        "scarf_multi_scale": b.overhead("oh_scarf_ms", multi_scale(sized(load("scarf.json"), size, int(size * 1.2))),
-                                        16),
-    }
+    if "overhead" in parts:
+        b.results["overhead"] = {
+            "half_cylinder": b.overhead("oh_half_cylinder", hc, 16),
+            "swatch_closeup": b.overhead("oh_swatch", sized(load("swatch_closeup.json"), size, size), 16),
+            "scarf": b.overhead("oh_scarf", sized(load("scarf.json"), size, int(size * 1.2)), 16),
+            "half_cylinder_multi_scale": b.overhead("oh_half_cylinder_ms", multi_scale(hc), 16),
+            "swatch_far_multi_scale": b.overhead("oh_swatch_far", far, 16),
+            "scarf_multi_scale": b.overhead("oh_scarf_ms", multi_scale(sized(load("scarf.json"), size, int(size * 1.2))),
+                                            16),
+        }
     b.results["finished"] = time.ctime()
     with open(os.path.join(b.out, "bench_knit.json"), "w") as f:
         json.dump(b.results, f, indent=2)

@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <exception>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -15,16 +16,19 @@ namespace knit::cli {
 namespace {
 
 const char* kUsage =
-    "usage: knitshade compare A.exr B.exr [--block N]\n"
+    "usage: knitshade compare A.exr B.exr [--block N] [--mask MASK.exr]\n"
     "\n"
     "Prints linear-space statistics of A against B as JSON: rmse, mae (mean\n"
     "absolute error), mean_a, mean_b, bias = mean_a - mean_b, and the same\n"
-    "relative to mean_b. --block N averages N x N pixel blocks first.\n";
+    "relative to mean_b. --block N averages N x N pixel blocks first.\n"
+    "--mask counts only the pixels whose mask value (first channel) is at\n"
+    "least 0.5, e.g. a mask from `knitshade render --mask-object NAME`.\n";
 
 int run(const std::vector<std::string>& args) {
   using namespace knit::render;
   std::vector<std::string> files;
   int block = 1;
+  std::string mask_file;
   for (size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
     if (a == "-h" || a == "--help") {
@@ -32,6 +36,8 @@ int run(const std::vector<std::string>& args) {
       return 0;
     } else if (a == "--block") {
       block = static_cast<int>(parse_int_option(a, option_value(args, i), 1, 4096));
+    } else if (a == "--mask") {
+      mask_file = option_value(args, i);
     } else if (!a.empty() && a[0] == '-') {
       throw UsageError{"unknown option " + a};
     } else {
@@ -41,7 +47,16 @@ int run(const std::vector<std::string>& args) {
   if (files.size() != 2) throw UsageError{"compare needs two images"};
   try {
     const RgbImage a = read_rgb_image(files[0]), b = read_rgb_image(files[1]);
-    std::printf("%s", compare_images(a, b, block).to_json().c_str());
+    if (mask_file.empty()) {
+      std::printf("%s", compare_images(a, b, block).to_json().c_str());
+    } else {
+      const RgbImage mask = read_rgb_image(mask_file);
+      try {
+        std::printf("%s", compare_images(a, b, block, &mask).to_json().c_str());
+      } catch (const std::invalid_argument& e) {
+        throw std::runtime_error(mask_file + ": " + e.what());
+      }
+    }
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "knitshade compare: error: %s\n", e.what());

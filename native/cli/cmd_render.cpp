@@ -32,7 +32,10 @@ const char* kUsage =
     "  --explicit-yarns         render knit materials as explicit yarn tubes (the ground\n"
     "                           truth) instead of with the knit model\n"
     "  --knit-preview-diffuse   debug: render knit materials as diffuse surfaces of their\n"
-    "                           first yarn colour\n";
+    "                           first yarn colour\n"
+    "  --mask-object NAME       write a coverage mask instead of radiance: per pixel, the\n"
+    "                           fraction of camera rays that first hit object NAME (for\n"
+    "                           `knitshade compare --mask`)\n";
 
 int run(const std::vector<std::string>& args) {
   using namespace knit::render;
@@ -61,6 +64,8 @@ int run(const std::vector<std::string>& args) {
       job.display.view = option_value(args, i);
     } else if (a == "--explicit-yarns") {
       job.explicit_yarns = true;
+    } else if (a == "--mask-object") {
+      job.mask_object = option_value(args, i);
     } else if (a == "--knit-preview-diffuse") {
       job.knit_preview_diffuse = true;
     } else if (!a.empty() && a[0] == '-') {

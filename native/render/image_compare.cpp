@@ -25,17 +25,26 @@ RgbImage block_average(const RgbImage& a, int block) {
   return out;
 }
 
-ImageStats compare_images(const RgbImage& a0, const RgbImage& b0, int block) {
+namespace {
+std::string size_text(const RgbImage& i) { return std::to_string(i.width) + "x" + std::to_string(i.height); }
+}  // namespace
+
+ImageStats compare_images(const RgbImage& a0, const RgbImage& b0, int block, const RgbImage* mask0) {
   if (a0.width != b0.width || a0.height != b0.height)
-    throw std::invalid_argument("compare_images: sizes differ (" + std::to_string(a0.width) + "x" +
-                                std::to_string(a0.height) + " vs " + std::to_string(b0.width) + "x" +
-                                std::to_string(b0.height) + ")");
+    throw std::invalid_argument("compare_images: sizes differ (" + size_text(a0) + " vs " + size_text(b0) + ")");
+  if (mask0 && (mask0->width != a0.width || mask0->height != a0.height))
+    throw std::invalid_argument("compare_images: the mask is " + size_text(*mask0) + ", the images " + size_text(a0));
   const RgbImage a = block_average(a0, block), b = block_average(b0, block);
+  RgbImage mask;
+  if (mask0) mask = block_average(*mask0, block);
   ImageStats s;
   s.width = a.width;
   s.height = a.height;
   double se = 0, ae = 0, sa = 0, sb = 0;
+  long counted = 0;
   for (size_t i = 0; i < a.pixels.size(); ++i) {
+    if (mask0 && !(mask.pixels[i].r >= 0.5f)) continue;
+    ++counted;
     const float pa[3] = {a.pixels[i].r, a.pixels[i].g, a.pixels[i].b};
     const float pb[3] = {b.pixels[i].r, b.pixels[i].g, b.pixels[i].b};
     for (int c = 0; c < 3; ++c) {
@@ -46,7 +55,9 @@ ImageStats compare_images(const RgbImage& a0, const RgbImage& b0, int block) {
       sb += pb[c];
     }
   }
-  const double n = 3.0 * double(a.pixels.size());
+  s.pixels = counted;
+  if (mask0 && counted == 0) throw std::invalid_argument("compare_images: the mask selects no pixel (none >= 0.5)");
+  const double n = 3.0 * double(counted);
   if (n == 0) return s;
   s.rmse = std::sqrt(se / n);
   s.mae = ae / n;
@@ -65,6 +76,7 @@ std::string ImageStats::to_json() const {
   nlohmann::ordered_json j;
   j["width"] = width;
   j["height"] = height;
+  j["pixels"] = pixels;
   j["rmse"] = rmse;
   j["mae"] = mae;
   j["mean_a"] = mean_a;

@@ -46,6 +46,24 @@ RenderJobResult run_render_job(const RenderJob& job, const std::function<void(co
     for (const std::string& w : warnings.messages) warn(w);
 
   RenderSettings settings;
+  if (!job.mask_object.empty()) {
+    std::string names;
+    for (size_t i = 0; i < desc.objects.size(); ++i) {
+      if (desc.objects[i].name == job.mask_object) {
+        settings.mask_material = scene.object_material(i);
+        if (settings.mask_material < 0)
+          throw std::runtime_error("--mask-object " + job.mask_object +
+                                   ": its knit material is drawn as explicit yarn tubes; a mask needs the base mesh "
+                                   "(render the mask without --explicit-yarns)");
+        break;
+      }
+      names += (names.empty() ? "" : ", ") + desc.objects[i].name;
+    }
+    if (settings.mask_material < 0)
+      throw std::runtime_error(job.scene_file + ": --mask-object " + job.mask_object + ": no object of that name (" +
+                               (names.empty() ? std::string("the scene has no named object") : "objects: " + names) +
+                               ")");
+  }
   settings.spp = desc.film.spp;
   settings.seed = desc.film.seed;
   settings.threads = job.threads;

@@ -23,6 +23,10 @@ struct RenderJob {
   ProgressMode progress = ProgressMode::Quiet;
   bool knit_preview_diffuse = false;  // debug: knit materials as diffuse surfaces
   bool explicit_yarns = false;        // knit materials as explicit yarn tubes
+  // Non-empty: write a coverage mask of the object of this name instead of
+  // radiance (1 where the camera sees its base mesh first, 0 elsewhere,
+  // fractions at its edges), for `knitshade compare --mask`.
+  std::string mask_object;
   DisplaySettings display;
 };
 

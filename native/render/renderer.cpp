@@ -43,7 +43,14 @@ RenderResult render_image(const Scene& scene, const RenderSettings& settings) {
           Sampler sampler(settings.seed, pixel, static_cast<uint64_t>(s));
           const Vec2 j = sampler.get2d();
           const RayDifferential ray = camera.generate(static_cast<float>(x) + j.x, static_cast<float>(y) + j.y, diff_scale);
-          const Rgb l = integrator.li(ray, sampler, stats);
+          Rgb l;
+          if (settings.mask_material >= 0) {
+            ++stats.camera_rays;
+            SurfaceInteraction si;
+            l = Rgb(scene.accel().intersect(ray, si) && si.material == settings.mask_material ? 1.0f : 0.0f);
+          } else {
+            l = integrator.li(ray, sampler, stats);
+          }
           if (!l.is_finite() || l.has_negative()) {
             if (stats.invalid_samples == 0) {
               bad_x = x;

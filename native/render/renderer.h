@@ -18,6 +18,9 @@ struct RenderSettings {
   int threads = 0;  // 0: every hardware thread
   ProgressMode progress = ProgressMode::Quiet;
   int tile_size = 16;
+  // >= 0: render a coverage mask instead of radiance, the fraction of each
+  // pixel's camera rays whose first hit is drawn with this material index.
+  int mask_material = -1;
 };
 
 struct RenderResult {

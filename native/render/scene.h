@@ -59,6 +59,9 @@ class Scene {
   const PinholeCamera& camera() const { return camera_; }
   const SceneStats& stats() const { return stats_; }
   float radius() const { return radius_; }
+  // Material index the base mesh of desc().objects[i] is drawn with (-1 when
+  // explicit yarn tubes replace it).
+  int object_material(size_t i) const { return object_materials_[i]; }
 
  private:
   SceneDesc desc_;
@@ -72,6 +75,7 @@ class Scene {
   PinholeCamera camera_;
   SceneStats stats_;
   float radius_ = 1;
+  std::vector<int> object_materials_;
 };
 
 }  // namespace knit::render

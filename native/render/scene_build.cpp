@@ -79,6 +79,7 @@ Scene::Scene(const SceneDesc& desc, const BuildOptions& options, Warnings& warni
       }
       if (explicit_yarns) {
         yarn_jobs.push_back({mesh, &md, &o});
+        object_materials_.push_back(-1);
         continue;  // the base mesh is only the top of the yarn shell: the tubes replace it
       }
       const std::string where = desc.file + ": " + o.path + " (" + o.name + ")";
@@ -89,6 +90,7 @@ Scene::Scene(const SceneDesc& desc, const BuildOptions& options, Warnings& warni
       material = static_cast<int>(materials_.size()) - 1;
     }
     stats_.mesh_bytes += mesh->memory_bytes();
+    object_materials_.push_back(material);
     accel_->add(std::make_unique<TriangleShape>(mesh), material, -1);
   }
   stats_.meshes_loaded = cache.size();

@@ -165,6 +165,66 @@ TEST(Cli, CompareReportsLinearErrors) {
   EXPECT_NE(missing.err.find("none.exr"), std::string::npos) << missing.err;
 }
 
+// A coverage mask of one object, and the error over the pixels it selects.
+TEST(Cli, MaskObjectAndCompareWithAMask) {
+  const std::string dir = test::test_dir();
+  std::string text = small_scene(R"({"type": "knit", "pattern": ["KP", "PK"], "uv_scale": 12, "yarn_colors": [[0.7, 0.1, 0.1]]})");
+  text.replace(text.find("\"objects\": [{"), 13, "\"objects\": [{\"name\": \"cloth\", ");
+  const std::string scene = test::write_file(dir, "scene.json", text);
+  const CliRun m = run(dir, "render " + scene + " -o " + dir + "/mask.exr --quiet --mask-object cloth");
+  ASSERT_EQ(m.code, 0) << m.err;
+  const RgbImage mask = read_rgb_image(dir + "/mask.exr");
+  // The tilted quad covers the middle of the frame, not its top corners; the
+  // mask sees the base mesh, whatever the yarn gaps let through.
+  int full = 0, empty = 0;
+  for (const Rgb& c : mask.pixels) {
+    ASSERT_TRUE(c.r >= 0 && c.r <= 1) << c.r;
+    full += c.r == 1.0f;
+    empty += c.r == 0.0f;
+  }
+  EXPECT_EQ(mask.at(12, 8).r, 1.0f);
+  EXPECT_EQ(mask.at(0, 0).r, 0.0f);
+  EXPECT_GT(full, 50);
+  EXPECT_GT(empty, 20);
+
+  // Images equal inside the mask and different outside: no error with the mask.
+  RgbImage a(mask.width, mask.height), b(mask.width, mask.height);
+  int selected = 0;
+  for (size_t i = 0; i < a.pixels.size(); ++i) {
+    const bool in = mask.pixels[i].r >= 0.5f;
+    selected += in;
+    a.pixels[i] = Rgb(0.5f);
+    b.pixels[i] = Rgb(in ? 0.5f : 2.0f);
+  }
+  write_float_image(dir + "/a.exr", a);
+  write_float_image(dir + "/b.exr", b);
+  const CliRun c = run(dir, "compare " + dir + "/a.exr " + dir + "/b.exr --mask " + dir + "/mask.exr");
+  ASSERT_EQ(c.code, 0) << c.err;
+  const nlohmann::json j = nlohmann::json::parse(c.out);
+  EXPECT_EQ(j["pixels"], selected);
+  EXPECT_EQ(j["rmse"].get<double>(), 0.0);
+  const nlohmann::json all = nlohmann::json::parse(run(dir, "compare " + dir + "/a.exr " + dir + "/b.exr").out);
+  EXPECT_EQ(all["pixels"], mask.width * mask.height);
+  EXPECT_GT(all["rmse"].get<double>(), 0.5);
+
+  // Errors name what is wrong.
+  const CliRun unknown = run(dir, "render " + scene + " -o " + dir + "/m2.exr --quiet --mask-object scarf");
+  EXPECT_EQ(unknown.code, 1);
+  EXPECT_NE(unknown.err.find("--mask-object scarf: no object of that name (objects: cloth)"), std::string::npos)
+      << unknown.err;
+  const CliRun tubes = run(dir, "render " + scene + " -o " + dir + "/m3.exr --quiet --explicit-yarns --mask-object cloth");
+  EXPECT_EQ(tubes.code, 1);
+  EXPECT_NE(tubes.err.find("explicit yarn tubes"), std::string::npos) << tubes.err;
+  write_float_image(dir + "/small.exr", RgbImage(3, 3));
+  const CliRun size = run(dir, "compare " + dir + "/a.exr " + dir + "/b.exr --mask " + dir + "/small.exr");
+  EXPECT_EQ(size.code, 1);
+  EXPECT_NE(size.err.find("small.exr: compare_images: the mask is 3x3, the images 24x16"), std::string::npos) << size.err;
+  write_float_image(dir + "/zero.exr", RgbImage(mask.width, mask.height));
+  const CliRun none = run(dir, "compare " + dir + "/a.exr " + dir + "/b.exr --mask " + dir + "/zero.exr");
+  EXPECT_EQ(none.code, 1);
+  EXPECT_NE(none.err.find("selects no pixel"), std::string::npos) << none.err;
+}
+
 TEST(Cli, UsageErrorsExitWith2AndBadOutputFailsBeforeRendering) {
   const std::string dir = test::test_dir();
   const std::string scene = test::write_file(dir, "scene.json", small_scene());
