@@ -79,43 +79,53 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
     return power_heuristic(state.bsdf_pdf, light_pdf);
   };
 
+  SurfaceInteraction si;
+  bool inside = false;  // si was found by a bounce inside the last hit's shell (Material::bounce_inside)
   for (;;) {
-    SurfaceInteraction si;
-    if (!scene_.accel().intersect(ray, si)) {
-      if (const Light* env = scene_.environment()) {
-        const Rgb le = env->environment(ray.d);
-        if (!le.is_black()) radiance += beta * le * emission_weight(scene_.environment_index(), ray.d, nullptr);
-      }
-      break;
-    }
     const Vec3 wo = -ray.d;
-    if (si.light >= 0) {
-      const Rgb le = scene_.light(si.light).emitted(si, wo);
-      if (!le.is_black()) radiance += beta * le * emission_weight(si.light, ray.d, &si);
-      break;  // emitters absorb
-    }
-
-    const Material& m = scene_.material(si.material);
-    const bool resolves = m.resolves_hits();
+    const Material* mat = nullptr;
+    bool resolves = true;
     PassThrough pt;
-    if (resolves) {
-      // The knit model or a yarn tube: finds what lies below the hit and
-      // sets the yarn shading frame, or lets the ray pass on straight.
-      pt = m.resolve(si, ray, sampler);
-      ++stats.resolves;
-      if (pt.pass) ++stats.resolve_passes;
+    if (inside) {
+      // Already resolved: no intersection, emission or pass-through.
+      inside = false;
+      mat = &scene_.material(si.material);
     } else {
-      // Where the interpolated normal puts the viewer on the other side than
-      // the geometry does (grazing views of smooth-shaded meshes), shade with
-      // the geometric normal: otherwise every sampled direction would be on
-      // the wrong side of the surface and the path would be lost.
-      if (dot(wo, si.shading.n) * dot(wo, si.ng) <= 0) {
-        const float sign = dot(si.shading.b, cross(si.shading.n, si.shading.t)) < 0 ? -1.0f : 1.0f;
-        si.shading = Frame::from_normal_tangent(si.ng, si.shading.t);
-        si.shading.b = si.shading.b * sign;
+      si = SurfaceInteraction{};
+      if (!scene_.accel().intersect(ray, si)) {
+        if (const Light* env = scene_.environment()) {
+          const Rgb le = env->environment(ray.d);
+          if (!le.is_black()) radiance += beta * le * emission_weight(scene_.environment_index(), ray.d, nullptr);
+        }
+        break;
       }
-      if (m.can_pass_through()) pt = m.pass_through(si, si.shading.to_local(wo), sampler.get1d());
+      if (si.light >= 0) {
+        const Rgb le = scene_.light(si.light).emitted(si, wo);
+        if (!le.is_black()) radiance += beta * le * emission_weight(si.light, ray.d, &si);
+        break;  // emitters absorb
+      }
+      mat = &scene_.material(si.material);
+      resolves = mat->resolves_hits();
+      if (resolves) {
+        // The knit model or a yarn tube: finds what lies below the hit and
+        // sets the yarn shading frame, or lets the ray pass on straight.
+        pt = mat->resolve(si, ray, sampler);
+        ++stats.resolves;
+        if (pt.pass) ++stats.resolve_passes;
+      } else {
+        // Where the interpolated normal puts the viewer on the other side than
+        // the geometry does (grazing views of smooth-shaded meshes), shade with
+        // the geometric normal: otherwise every sampled direction would be on
+        // the wrong side of the surface and the path would be lost.
+        if (dot(wo, si.shading.n) * dot(wo, si.ng) <= 0) {
+          const float sign = dot(si.shading.b, cross(si.shading.n, si.shading.t)) < 0 ? -1.0f : 1.0f;
+          si.shading = Frame::from_normal_tangent(si.ng, si.shading.t);
+          si.shading.b = si.shading.b * sign;
+        }
+        if (mat->can_pass_through()) pt = mat->pass_through(si, si.shading.to_local(wo), sampler.get1d());
+      }
     }
+    const Material& m = *mat;
     const Vec3 wo_l = si.shading.to_local(wo);
     beta *= pt.weight;
     if (pt.pass) {
@@ -156,7 +166,9 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
             tmax = dist * (1.0f - 1e-4f) - 1e-5f * (1.0f + max_abs_component(ls.p));
           }
           if (tmax > 0) {
-            const Rgb tr = shadow_transmittance(origin, dir, tmax, stats, sampler);
+            // Yarn between the shading point and the shell's surface first.
+            Rgb tr = resolves ? m.self_transmittance(si, dir) : Rgb(1.0f);
+            if (!tr.is_black()) tr *= shadow_transmittance(origin, dir, tmax, stats, sampler);
             if (!tr.is_black()) {
               float w = 1.0f;
               if (!ls.delta && strategy == Strategy::Mis)
@@ -186,6 +198,15 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
       const float q = std::min(0.95f, beta.max());
       if (!(q > 0) || sampler.get1d() >= q) break;
       beta = beta / q;
+    }
+    if (resolves && m.bounce_inside(si, wi)) {
+      // Met yarn again inside the shell: that is the next vertex.
+      ray.o = si.p;
+      ray.d = wi;
+      ray.has_differentials = false;
+      inside = true;
+      ++stats.shell_bounces;
+      continue;
     }
     RayDifferential next;
     next.o = offset_ray_origin(si.p, si.ng, wi);

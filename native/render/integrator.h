@@ -22,6 +22,7 @@ struct PathStats {
   uint64_t resolves = 0;        // hits resolved by a material (knit model: shade(); explicit yarns)
   uint64_t resolve_passes = 0;  // ... of which passed straight on
   uint64_t shadow_resolves = 0; // shadow-ray crossings of such materials (knit model: transmittance())
+  uint64_t shell_bounces = 0;   // bounces that met yarn again inside the same shell (no scene ray)
 
   void add(const PathStats& o) {
     camera_rays += o.camera_rays;
@@ -32,6 +33,7 @@ struct PathStats {
     resolves += o.resolves;
     resolve_passes += o.resolve_passes;
     shadow_resolves += o.shadow_resolves;
+    shell_bounces += o.shell_bounces;
   }
   uint64_t total_rays() const { return camera_rays + bounce_rays + shadow_rays; }
 };

@@ -16,6 +16,13 @@ struct YarnShading {
   // (pattern units) and azimuth around it (radians) at the hit.
   int color = 0;
   float arc = 0, phi = 0;
+  // The knit model's near field: the yarn point hit inside the shell
+  // (pattern space) and the base mesh's frame there, for self-shadowing and
+  // bounces inside the shell (KnitModelMaterial).
+  bool in_shell = false;
+  bool from_back = false;
+  knit::k::kvec3 shell_p{};
+  Frame base;
 };
 
 // Screen-space footprint of a hit (ray differentials, Igehy 1999): how the

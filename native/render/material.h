@@ -67,6 +67,16 @@ class Material {
   // Hit resolution (see above).
   virtual bool resolves_hits() const { return false; }
   virtual PassThrough resolve(SurfaceInteraction&, const RayDifferential&, Sampler&) const { return {}; }
+  // Self-shadowing of a resolved hit: the transmittance, along the world
+  // direction w, of what lies between the shading point and the surface the
+  // hit was found on (the knit model's yarn shell); shadow rays towards a
+  // light start beyond that surface.
+  virtual Rgb self_transmittance(const SurfaceInteraction&, Vec3 /*w*/) const { return Rgb(1.0f); }
+  // A bounce of a resolved hit that stays inside it: when the ray leaving si
+  // along wi (world) meets the same material again before leaving the
+  // surface's shell, si becomes that hit (shading set, as resolve does) and
+  // the result is true; false when the ray leaves and is traced on.
+  virtual bool bounce_inside(SurfaceInteraction&, Vec3 /*wi*/) const { return false; }
   // True when pass_through() or transmittance() can be non-zero.
   virtual bool can_pass_through() const { return false; }
   // False when every lobe is delta: next-event estimation is skipped.

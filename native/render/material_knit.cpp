@@ -154,17 +154,56 @@ PassThrough KnitModelMaterial::resolve(SurfaceInteraction& si, const RayDifferen
     pt.pass = true;  // multi-scale: through a gap, with probability p_delta
     return pt;
   }
+  apply_shade(si, sh, model);
+  if (!si.yarn.active) pt.pass = true;  // never seen; keeps a broken frame from producing NaNs
+  return pt;
+}
+
+void KnitModelMaterial::apply_shade(SurfaceInteraction& si, const knit::KnitShade& sh,
+                                    const knit::KnitMaterial& model) const {
   // Shaded at the base hit point, in the yarn's frame.
   const Vec3 n = from_kvec(sh.sn);
   const float ln = length(n);
-  if (!(ln > 0.5f) || !std::isfinite(ln)) {
-    pt.pass = true;  // never seen; keeps a broken frame from producing NaNs
-    return pt;
-  }
+  si.yarn.active = false;
+  if (!(ln > 0.5f) || !std::isfinite(ln)) return;
+  const Frame base = si.yarn.in_shell ? si.yarn.base : si.shading;
   si.shading = Frame::from_normal_tangent(n / ln, from_kvec(sh.st));
   si.yarn.active = true;
   si.yarn.bsdf = model.kernel_bsdf(sh);
-  return pt;
+  si.yarn.in_shell = sh.in_shell;
+  si.yarn.from_back = sh.from_back;
+  si.yarn.shell_p = sh.p_yarn;
+  si.yarn.base = base;
+}
+
+knit::BaseHit KnitModelMaterial::shell_base_hit(const SurfaceInteraction& si) const {
+  SurfaceInteraction base = si;
+  base.shading = si.yarn.base;
+  base.footprint.valid = false;
+  return base_hit(base);
+}
+
+knit::KnitShade KnitModelMaterial::shell_shade(const SurfaceInteraction& si) {
+  knit::KnitShade from;
+  from.in_shell = si.yarn.in_shell;
+  from.from_back = si.yarn.from_back;
+  from.p_yarn = si.yarn.shell_p;
+  return from;
+}
+
+Rgb KnitModelMaterial::self_transmittance(const SurfaceInteraction& si, Vec3 w) const {
+  if (!si.yarn.in_shell) return Rgb(1.0f);
+  return near_model().occluded_from(shell_base_hit(si), shell_shade(si), to_kvec(w), frame_.get()) ? Rgb()
+                                                                                                   : Rgb(1.0f);
+}
+
+bool KnitModelMaterial::bounce_inside(SurfaceInteraction& si, Vec3 wi) const {
+  if (!si.yarn.in_shell) return false;
+  const knit::KnitMaterial& model = near_model();
+  const knit::KnitShade sh = model.shade_from(shell_base_hit(si), shell_shade(si), to_kvec(wi), frame_.get());
+  if (sh.pass_through) return false;
+  apply_shade(si, sh, model);
+  return si.yarn.active;
 }
 
 Rgb KnitModelMaterial::transmittance(const SurfaceInteraction& si, Vec3 w, Sampler& sampler) const {

@@ -64,6 +64,8 @@ class KnitModelMaterial final : public YarnShadedMaterial {
   const char* kind() const override { return "knit"; }
   PassThrough resolve(SurfaceInteraction& si, const RayDifferential& ray, Sampler& sampler) const override;
   Rgb transmittance(const SurfaceInteraction& si, Vec3 w, Sampler& sampler) const override;
+  Rgb self_transmittance(const SurfaceInteraction& si, Vec3 w) const override;
+  bool bounce_inside(SurfaceInteraction& si, Vec3 wi) const override;
 
   const knit::KnitMaterial& model() const { return *model_; }
   // The BaseHit resolve() passes to the model; the UV footprint is scaled to
@@ -80,6 +82,13 @@ class KnitModelMaterial final : public YarnShadedMaterial {
   // footprint point would be the same CAPM ray: one march instead of N);
   // otherwise model_ itself.
   const knit::KnitMaterial& model_for(const knit::BaseHit& hit) const;
+  // The near-field model (point_model_ or model_) and the base hit and shade
+  // of a hit resolved inside the shell (si.yarn.in_shell), for marching on from it.
+  const knit::KnitMaterial& near_model() const { return point_model_ ? *point_model_ : *model_; }
+  knit::BaseHit shell_base_hit(const SurfaceInteraction& si) const;
+  static knit::KnitShade shell_shade(const SurfaceInteraction& si);
+  // Sets si's shading frame and yarn BSDF from a resolved shade.
+  void apply_shade(SurfaceInteraction& si, const knit::KnitShade& sh, const knit::KnitMaterial& model) const;
   float min_footprint_ = 0;  // pattern units: smaller footprints count as none
   float footprint_scale_ = 1;  // pixels
 

@@ -104,6 +104,7 @@ RenderJobResult run_render_job(const RenderJob& job, const std::function<void(co
   rep.resolves = r.stats.resolves;
   rep.resolve_passes = r.stats.resolve_passes;
   rep.shadow_resolves = r.stats.shadow_resolves;
+  rep.shell_bounces = r.stats.shell_bounces;
   rep.triangles = scene.stats().triangles;
   rep.mesh_bytes = scene.stats().mesh_bytes;
   rep.embree_bytes = scene.accel().embree_bytes();

@@ -58,10 +58,13 @@ std::string RenderReport::to_text() const {
                 format_bytes(static_cast<double>(mesh_bytes)).c_str(), triangles);
   s += buf;
   if (knit_materials > 0) {
-    std::snprintf(buf, sizeof buf, "  knit hits   %.2f per sample (%.0f%% passed on), %.2f shadow-ray crossings per sample\n",
+    std::snprintf(buf, sizeof buf,
+                  "  knit hits   %.2f per sample (%.0f%% passed on), %.2f shadow-ray crossings and %.2f bounces "
+                  "inside the shell per sample\n",
                   samples ? double(resolves) / double(samples) : 0.0,
                   resolves ? 100.0 * double(resolve_passes) / double(resolves) : 0.0,
-                  samples ? double(shadow_resolves) / double(samples) : 0.0);
+                  samples ? double(shadow_resolves) / double(samples) : 0.0,
+                  samples ? double(shell_bounces) / double(samples) : 0.0);
     s += buf;
     if (explicit_yarns) {
       std::snprintf(buf, sizeof buf,
@@ -115,6 +118,7 @@ std::string RenderReport::to_json() const {
                        {"embree_yarns", embree_yarn_bytes}};
   j["knit"] = {{"materials", knit_materials}, {"explicit_yarns", explicit_yarns},
                {"hits", resolves}, {"hits_passed", resolve_passes}, {"shadow_crossings", shadow_resolves},
+               {"shell_bounces", shell_bounces},
                {"yarn_points", yarn_points}, {"yarn_segments", yarn_segments}, {"yarn_curves", yarn_curves},
                {"yarn_build_seconds", yarn_build_seconds}};
   return j.dump(2) + "\n";

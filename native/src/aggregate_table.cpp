@@ -108,6 +108,11 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
         if (j < kMaxCells) cells[cls][j] = {k, c};
       }
     }
+  class_of_.resize(size_t(g.rows) * size_t(g.cols));
+  for (int k = 0; k < g.rows; ++k)
+    for (int c = 0; c < g.cols; ++c)
+      class_of_[size_t(k::knit_cell_index(g, k, c))] = static_cast<unsigned char>(cell_class(surface, k, c));
+  one_colour_ = std::all_of(surface.colors(), surface.colors() + class_of_.size(), [](int c) { return c == 0; });
   int slots = 0;
   for (int i = 0; i < kClasses; ++i) slot_[size_t(i)] = cells[size_t(i)].empty() ? -1 : slots++;
   stats_.assign(size_t(slots) * kThetaBins * kPhiBins, Stats{});
@@ -190,9 +195,7 @@ int FootprintTable::classes_present() const {
   return int(std::count_if(slot_.begin(), slot_.end(), [](int s) { return s >= 0; }));
 }
 
-FootprintTable::Stats FootprintTable::lookup(int cls, Vec3 wi) const {
-  const int slot = slot_[size_t(cls)];
-  if (slot < 0) return Stats{};  // not in the pattern (cannot happen for its own cells)
+FootprintTable::DirWeights FootprintTable::dir_weights(Vec3 wi) {
   const float th = std::acos(std::clamp(wi.z, -1.0f, 1.0f));
   float ph = std::atan2(wi.y, wi.x);
   if (ph < 0) ph += 2 * kPi;
@@ -202,15 +205,22 @@ FootprintTable::Stats FootprintTable::lookup(int cls, Vec3 wi) const {
   const float fp = ph / (2 * kPi) * kPhiBins;
   const int j0 = std::min(int(fp), kPhiBins - 1), j1 = (j0 + 1) % kPhiBins;
   const float wp = std::clamp(fp - float(j0), 0.0f, 1.0f);
-  const int is[4] = {i0, i0, i1, i1}, js[4] = {j0, j1, j0, j1};
-  const float ws[4] = {(1 - wt) * (1 - wp), (1 - wt) * wp, wt * (1 - wp), wt * wp};
+  DirWeights d;
+  d.node = {i0 * kPhiBins + j0, i0 * kPhiBins + j1, i1 * kPhiBins + j0, i1 * kPhiBins + j1};
+  d.w = {(1 - wt) * (1 - wp), (1 - wt) * wp, wt * (1 - wp), wt * wp};
+  return d;
+}
+
+FootprintTable::Stats FootprintTable::lookup(int cls, const DirWeights& d) const {
+  const int slot = slot_[size_t(cls)];
+  if (slot < 0) return Stats{};  // not in the pattern (cannot happen for its own cells)
   // Hit-conditioned means are interpolated with hit-weighted weights.
   float hit = 0;
   StatsMix<Stats> mix;
   for (int q = 0; q < 4; ++q) {
-    const Stats& s = stats_[(size_t(slot) * kThetaBins + size_t(is[q])) * kPhiBins + size_t(js[q])];
-    hit += ws[q] * s.hit;
-    mix.add(s, ws[q] * s.hit);
+    const Stats& s = stats_[size_t(slot) * kThetaBins * kPhiBins + size_t(d.node[size_t(q)])];
+    hit += d.w[size_t(q)] * s.hit;
+    mix.add(s, d.w[size_t(q)] * s.hit);
   }
   return mix.result(hit);
 }
@@ -218,35 +228,45 @@ FootprintTable::Stats FootprintTable::lookup(int cls, Vec3 wi) const {
 template <class Visit>
 void FootprintTable::for_each_cell(const KnitSurface& surface, const k::KFootprint& f, Visit&& visit) const {
   const k::KnitGeom& g = surface.geom();
+  auto cell = [&](int k, int c) { visit(int(class_of_[size_t(k::knit_cell_index(g, k, c))]), k, c); };
   if (int64_t(f.ncx) * int64_t(f.ncy) <= KNIT_MS_MAX_POINTS) {  // up to 1e5 x 1e5 cells: no int product
     for (int cy = 0; cy < f.ncy; ++cy)
-      for (int cx = 0; cx < f.ncx; ++cx) visit(f.by0 + cy, f.bx0 + cx);
+      for (int cx = 0; cx < f.ncx; ++cx) cell(f.by0 + cy, f.bx0 + cx);
     return;
   }
   for (int i = 0; i < f.n; ++i) {
     const Vec3 p = k::knit_footprint_point(g, f, i);
-    visit(int(std::floor(p.y / g.row_spacing)), int(std::floor(p.x / K_2PI)));
+    cell(int(std::floor(p.y / g.row_spacing)), int(std::floor(p.x / K_2PI)));
   }
 }
 
 k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
   const k::KnitGeom& g = surface.geom();
   k::KnitAggregate a{};
+  // The direction is the same for every cell: one lookup per class present.
+  const DirWeights dw = dir_weights(wi);
+  std::array<Stats, kClasses> cls_stats;
+  std::array<bool, kClasses> looked_up{};
+  std::array<double, kClasses> cls_hits{};
   double cells = 0, hits = 0;
-  StatsMix<Stats> mix;
   struct Pick {
     int colour;
     float cum;
   };
   std::array<Pick, KNIT_MS_MAX_POINTS> picks{};
   int npicks = 0;
-  for_each_cell(surface, f, [&](int k, int c) {
-    const Stats s = lookup(cell_class(surface, k, c), wi);
+  for_each_cell(surface, f, [&](int cls, int k, int c) {
+    if (!looked_up[size_t(cls)]) {
+      cls_stats[size_t(cls)] = lookup(cls, dw);
+      looked_up[size_t(cls)] = true;
+    }
+    const Stats& s = cls_stats[size_t(cls)];
     cells += 1;
     if (s.hit <= 0) return;
     const float w = s.hit;
     hits += w;
-    mix.add(s, w);
+    cls_hits[size_t(cls)] += w;
+    if (one_colour_) return;
     // Colours of the yarns hit: the 3 x 3 block around the cell, by share.
     int colour = -1;
     float share = -1;
@@ -274,7 +294,10 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
     a.position = k::kv3(f.x, f.y, 0);
     return a;
   }
-  // The hit-weighted means over the cells; the covariance about the mean slope.
+  // The hit-weighted means over the cells (by class: the same sums); the
+  // covariance about the mean slope.
+  StatsMix<Stats> mix;
+  for (int cls = 0; cls < kClasses; ++cls) mix.add(cls_stats[size_t(cls)], float(cls_hits[size_t(cls)]));
   const Stats m = mix.result(float(hits / cells));
   const double inv = 1 / hits;
   a.n = k::kv3_normalize(k::kv3(m.nx, m.ny, m.nz));
@@ -284,6 +307,11 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
   a.syy = std::max(m.syy - m.sy * m.sy, 0.0f);
   a.sxy = m.sxy - m.sx * m.sy;
   a.layers = m.layers;
+  if (one_colour_) {
+    a.color_w[0] = 1;
+    a.color_pick = 0;
+    return a;
+  }
   for (float& w : a.color_w) w = float(w * inv);
   // One cell's colour, chosen in proportion to its hits by the footprint's shift.
   const float u = k::knit_frac(f.shift_x * 7 + f.shift_y * 3 + 0.5f) * float(hits);
@@ -296,10 +324,22 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
 }
 
 float FootprintTable::p_delta(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
+  const DirWeights dw = dir_weights(wi);
+  // Only hit fractions: bilinear in direction, per class.
+  std::array<float, kClasses> hit;
+  hit.fill(-1);
   double cells = 0, hits = 0;
-  for_each_cell(surface, f, [&](int k, int c) {
+  for_each_cell(surface, f, [&](int cls, int, int) {
+    float& h = hit[size_t(cls)];
+    if (h < 0) {
+      h = 0;
+      const int slot = slot_[size_t(cls)];
+      if (slot >= 0)
+        for (int q = 0; q < 4; ++q)
+          h += dw.w[size_t(q)] * stats_[size_t(slot) * kThetaBins * kPhiBins + size_t(dw.node[size_t(q)])].hit;
+    }
     cells += 1;
-    hits += lookup(cell_class(surface, k, c), wi).hit;
+    hits += h;
   });
   return cells > 0 ? float(1 - hits / cells) : 1.0f;
 }

@@ -116,7 +116,48 @@ size_t KnitMaterial::state_bytes() const {
 k::KnitCapm KnitMaterial::march(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame) const {
   const float x = params_.uv_scale * hit.u, y = params_.uv_scale * hit.v;
   const Vec3 wi = k::kv3_neg(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n));
-  const k::KnitCapm start = k::knit_capm_start(surface_.geom(), x, y, wi);
+  return march_state(hit, k::knit_capm_start(surface_.geom(), x, y, wi), ray_dir, frame);
+}
+
+k::KnitCapm KnitMaterial::march_from(const BaseHit& hit, const KnitShade& from, Vec3 dir_world,
+                                     const FrameProvider* frame) const {
+  // Started a twentieth of the radius along the ray: the tube the point lies
+  // on is then entered behind the start (its entry does not count), which
+  // float rounding at pattern coordinates up to ~1e4 cannot undo; another
+  // tube closer than that to the point is missed.
+  const Vec3 d = k::kv3_normalize(k::kv3_to_local(dir_world, hit.t, hit.b, hit.n));
+  const Vec3 p = k::kv3_madd(from.p_yarn, d, 0.05f * surface_.geom().r);
+  return march_state(hit, k::knit_capm_begin_at(p, d), dir_world, frame);
+}
+
+bool KnitMaterial::occluded_from(const BaseHit& hit, const KnitShade& from, Vec3 dir_world,
+                                 const FrameProvider* frame) const {
+  if (!from.in_shell) return false;
+  return march_from(hit, from, dir_world, frame).state == KNIT_CAPM_HIT;
+}
+
+KnitShade KnitMaterial::shade_from(const BaseHit& hit, const KnitShade& from, Vec3 dir_world,
+                                   const FrameProvider* frame) const {
+  KnitShade sh;
+  const YarnBsdfParams& bp = params_.bsdf;
+  sh.spec_r = k::bsdf_mf_make(bp.roughness_x, bp.roughness_y, bp.eta);
+  sh.spec_t = k::bsdf_mf_make(bp.trans_roughness_x, bp.trans_roughness_y, bp.eta);
+  sh.from_back = from.from_back;
+  if (!from.in_shell) return sh;
+  const k::KnitCapm st = march_from(hit, from, dir_world, frame);
+  sh.steps = st.steps;
+  if (st.state != KNIT_CAPM_HIT) {
+    sh.point.p_delta = 1;
+    return sh;
+  }
+  sh.in_shell = true;
+  shade_yarn(hit, st.hit, frame, sh);
+  return sh;
+}
+
+k::KnitCapm KnitMaterial::march_state(const BaseHit& hit, const k::KnitCapm& start, Vec3 ray_dir,
+                                      const FrameProvider* frame) const {
+  const float x = params_.uv_scale * hit.u, y = params_.uv_scale * hit.v;
   if (frame) return surface_.march(start, ray_dir, frame, params_.capm_options);
   const float S = hit.pattern_per_world;
   const float kx = hit.kx / S, ky = hit.ky / S;
@@ -124,7 +165,8 @@ k::KnitCapm KnitMaterial::march(const BaseHit& hit, Vec3 ray_dir, const FramePro
   const CapmOptions& o = params_.capm_options;
   const float seg = kmax > 0 ? std::min(o.max_segment, o.max_bend / kmax) : o.max_segment;
   return k::knit_capm_march_curved(surface_.geom(), surface_.codes(), surface_.colors(), start, x, y,
-                                   k::kv3_neg(k::kv3_normalize(wi)), kx, ky, seg, o.max_steps);
+                                   k::kv3_normalize(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n)), kx, ky, seg,
+                                   o.max_steps);
 }
 
 int KnitMaterial::footprint_points_for(Vec3 fx, Vec3 fy) const {
@@ -268,6 +310,17 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     // Without parallax the hit is where the ray met the mesh.
     h.p = k::kv3(x, y, h.p.z);
   }
+  sh.in_shell = params_.capm;  // without parallax there is no shell to march in
+  shade_yarn(hit, h, frame, sh);
+  return sh;
+}
+
+void KnitMaterial::shade_yarn(const BaseHit& hit, const k::KnitLineHit& h, const FrameProvider* frame,
+                              KnitShade& sh) const {
+  const float S = hit.pattern_per_world;
+  const float x = params_.uv_scale * hit.u, y = params_.uv_scale * hit.v;
+  const float top = surface_.shell_top();
+  sh.p_yarn = h.p;
   sh.pass_through = false;
   sh.point.layers =
       std::max(1, k::knit_vertical_layers(surface_.geom(), surface_.codes(), surface_.colors(), h.p.x, h.p.y));
@@ -302,7 +355,6 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
   sh.sn = to_world(ln, ft, fb, fn);
   const Vec3 d = k::kv3_sub(h.p, k::kv3(x, y, top));
   sh.offset = k::kv3_scale(to_world(d, hit.t, hit.b, hit.n), 1.0f / S);
-  return sh;
 }
 
 float KnitMaterial::transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,

@@ -233,4 +233,78 @@ TEST(Shading, MultiScaleShowsColourIndicesPastEight) {
   for (int c = 0; c < 10; ++c) EXPECT_GT(seen[size_t(c)], 0) << "colour " << c << " never shown";
 }
 
+// Self-shadowing and bounces inside the shell (near field): from a yarn hit,
+// the path towards a light (or a sampled direction) either leaves the shell
+// or meets other yarn first. Checked against double-precision ray casts of the
+// explicit tubes from the tubes' own hit point.
+TEST(Shading, PathsFromAYarnHitMeetOtherYarnAsExplicitTubesDo) {
+  for (const NamedPattern& np : {NamedPattern{"stockinette", stockinette()}, NamedPattern{"seed", seed()},
+                                 NamedPattern{"rib_1x1", rib_1x1()}}) {
+    GroundTruthScene sc(np.pattern, StitchParams{}, 0, 45);
+    KnitMaterialParams mp = flat_params();
+    mp.ply_detail = false;
+    KnitMaterial m(np.pattern, mp);
+    const double r = sc.surface.params().r, top = sc.surface.shell_top();
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> U(0, 1);
+    int n = 0, agree = 0, occluded = 0, both = 0;
+    double pos_err = 0;
+    for (int i = 0; i < 3000 && n < 800; ++i) {
+      const double x = sc.x0 + (sc.x1 - sc.x0) * U(rng), y = sc.y0 + (sc.y1 - sc.y0) * U(rng);
+      const double th = 1.2 * U(rng), ph = 6.283 * U(rng);
+      const D3 wi = {std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)};
+      D3 o, d;
+      sc.entry_ray(x, y, wi, o, d);
+      const TubeHit gt = sc.tubes.intersect(o, d, 0, sc.shell_exit(o, d));
+      BaseHit bh;
+      bh.u = float(x);
+      bh.v = float(y);
+      const KnitShade sh = m.shade(bh, k::kv3(float(d[0]), float(d[1]), float(d[2])), nullptr);
+      if (!gt.hit || sh.pass_through) continue;
+      ASSERT_TRUE(sh.in_shell);
+      // The same point on both (else the comparison below is of different paths).
+      if (norm(sub(D3{sh.p_yarn.x, sh.p_yarn.y, sh.p_yarn.z}, gt.p)) > 0.02 * r) continue;
+      // A direction leaving the tube's surface, over the whole sphere otherwise.
+      const double lz = 2 * U(rng) - 1, lp = 6.283 * U(rng), ls = std::sqrt(1 - lz * lz);
+      const D3 L = {ls * std::cos(lp), ls * std::sin(lp), lz};
+      if (dot(L, gt.normal) < 0.1) continue;
+      const double t_exit = L[2] > 0 ? (top - gt.p[2]) / L[2] : (gt.p[2] + top) / -L[2];
+      const TubeHit g2 = sc.tubes.intersect(gt.p, L, 0.05 * r, t_exit);
+      // Skip the paths that graze a tube (the truth flips under a 3% r move).
+      const TubeHit g3 = sc.tubes.intersect(add(gt.p, mul(gt.normal, 0.03 * r)), L, 0.05 * r, t_exit);
+      if (g2.hit != g3.hit) continue;
+      ++n;
+      const Vec3 lw = k::kv3(float(L[0]), float(L[1]), float(L[2]));
+      const bool occ = m.occluded_from(bh, sh, lw, nullptr);
+      occluded += g2.hit;
+      agree += occ == g2.hit;
+      const KnitShade next = m.shade_from(bh, sh, lw, nullptr);
+      EXPECT_EQ(next.pass_through, !occ) << np.name << " " << i;
+      if (g2.hit && !next.pass_through) {
+        ++both;
+        EXPECT_TRUE(next.in_shell);
+        pos_err += norm(sub(D3{next.p_yarn.x, next.p_yarn.y, next.p_yarn.z}, g2.p)) / r;
+      }
+    }
+    std::printf("[self-shadow] %-12s paths %d: agreement %.2f%%, occluded (truth) %.1f%%, next-hit position error "
+                "mean %.4f r\n",
+                np.name.c_str(), n, 100.0 * agree / n, 100.0 * occluded / n, both ? pos_err / both : 0.0);
+    EXPECT_GE(n, 500) << np.name;
+    EXPECT_GT(occluded, n / 10) << np.name << ": too few occluded paths for a meaningful test";
+    EXPECT_GE(agree, n * 98 / 100) << np.name;
+    EXPECT_LT(pos_err / std::max(both, 1), 0.05) << np.name;
+  }
+  // No shell without parallax: nothing to march from.
+  KnitMaterialParams flat = flat_params();
+  flat.capm = false;
+  KnitMaterial m(seed(), flat);
+  BaseHit bh;
+  bh.u = 3;
+  bh.v = 2;
+  const KnitShade sh = m.shade(bh, k::kv3(0, 0, -1), nullptr);
+  EXPECT_FALSE(sh.in_shell);
+  EXPECT_FALSE(m.occluded_from(bh, sh, k::kv3(0, 0, 1), nullptr));
+  EXPECT_TRUE(m.shade_from(bh, sh, k::kv3(0, 0, 1), nullptr).pass_through);
+}
+
 }  // namespace

@@ -57,7 +57,7 @@ class FootprintTable {
   // Class (0..9) of cell (row k from the bottom, column c) of the surface.
   static int cell_class(const KnitSurface& surface, int k, int c);
 
-  size_t bytes() const { return sizeof(*this) + stats_.size() * sizeof(Stats); }
+  size_t bytes() const { return sizeof(*this) + stats_.size() * sizeof(Stats) + class_of_.size(); }
   int classes_present() const;
 
  private:
@@ -71,12 +71,21 @@ class FootprintTable {
     float z = 0;                     // mean hit height
     float near[9] = {};              // share of the hits on yarn of cell (k + dk, c + dc), dk, dc in -1..1
   };
-  Stats lookup(int cls, Vec3 wi_local) const;
+  // The four grid nodes around a direction and their bilinear weights.
+  struct DirWeights {
+    std::array<int, 4> node;  // theta * kPhiBins + phi
+    std::array<float, 4> w;
+  };
+  static DirWeights dir_weights(Vec3 wi_local);
+  Stats lookup(int cls, const DirWeights& d) const;
+  // Visits (class, row, column) of the cells of f.
   template <class Visit>
   void for_each_cell(const KnitSurface& surface, const k::KFootprint& f, Visit&& visit) const;
 
   std::array<int, kClasses> slot_{};  // index into stats_ blocks, -1 when the class is absent
   std::vector<Stats> stats_;          // [slot][theta][phi]
+  std::vector<unsigned char> class_of_;  // class of each pattern cell, by knit_cell_index
+  bool one_colour_ = true;               // every cell has colour index 0
 };
 
 }  // namespace knit

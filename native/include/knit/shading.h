@@ -59,6 +59,11 @@ struct KnitShade {
   Rgb kd_r, kd_t;            // body colours at this point (multi-scale: mixed over the footprint)
   k::KMicrofacet spec_r{}, spec_t{};  // specular lobes at this point (multi-scale: LEAN-widened)
   int steps = 0;             // CAPM segments marched (summed over footprint points)
+  // Near field: the yarn point hit, inside the shell (pattern space). Light
+  // and bounces leaving it cross the rest of the shell first: occluded_from
+  // and shade_from march from it.
+  bool in_shell = false;
+  Vec3 p_yarn{};
 };
 
 class KnitMaterial {
@@ -82,6 +87,16 @@ class KnitMaterial {
   float transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
                       std::array<float, 2> shift = {0.5f, 0.5f}) const;
 
+  // Self-shadowing (near field, `from` a shade() or shade_from() result with
+  // in_shell): whether the straight path from its yarn point along dir_world
+  // (unit, e.g. towards a light) meets other yarn before it leaves the
+  // shell. `hit` is the base hit `from` was shaded at.
+  bool occluded_from(const BaseHit& hit, const KnitShade& from, Vec3 dir_world, const FrameProvider* frame) const;
+  // A bounce inside the shell: the yarn the ray from `from`'s yarn point
+  // along dir_world meets before leaving the shell, shaded (pass_through
+  // when it leaves without meeting any).
+  KnitShade shade_from(const BaseHit& hit, const KnitShade& from, Vec3 dir_world, const FrameProvider* frame) const;
+
   // The kernel BSDF at a shading point (colour from the palette, roughness,
   // layers and ply shadow from `sh`).
   k::KYarnBsdf kernel_bsdf(const KnitShade& sh) const;
@@ -93,6 +108,15 @@ class KnitMaterial {
 
  private:
   k::KnitCapm march(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame) const;
+  // March from `start` (pattern space) for a ray along ray_dir (world) on
+  // the base of `hit`: the frame field or hit's curvature bends it.
+  k::KnitCapm march_state(const BaseHit& hit, const k::KnitCapm& start, Vec3 ray_dir,
+                          const FrameProvider* frame) const;
+  // March from `from`'s yarn point along dir_world (see occluded_from).
+  k::KnitCapm march_from(const BaseHit& hit, const KnitShade& from, Vec3 dir_world,
+                         const FrameProvider* frame) const;
+  // Near-field shading at yarn hit h of a ray that met the base at `hit`.
+  void shade_yarn(const BaseHit& hit, const k::KnitLineHit& h, const FrameProvider* frame, KnitShade& sh) const;
   // Points marched over a footprint spanned by fx, fy (pattern units).
   int footprint_points_for(Vec3 fx, Vec3 fy) const;
   void set_colors(KnitShade& sh, int color_index) const;
