@@ -559,8 +559,8 @@ const char* mode_name(KnitMode m) {
 
 KnitMaterial make_material(const Pattern& pattern, const StitchParams& stitch, ::py::object bsdf,
                            ::py::object ply, const std::string& mode, bool capm, bool ply_detail,
-                           int footprint_points, bool footprint_table, double uv_scale, int max_steps,
-                           double max_segment, double max_bend) {
+                           int footprint_points, bool footprint_table, bool self_shadowing, double uv_scale,
+                           int max_steps, double max_segment, double max_bend) {
   KnitMaterialParams mp;
   mp.stitch = stitch;
   if (bsdf.is_none()) {
@@ -598,6 +598,7 @@ KnitMaterial make_material(const Pattern& pattern, const StitchParams& stitch, :
   mp.ply_detail = ply_detail;
   mp.footprint_points = footprint_points;
   mp.footprint_table = footprint_table;
+  mp.self_shadowing = self_shadowing;
   mp.uv_scale = float(uv_scale);
   mp.capm_options.max_steps = max_steps;
   mp.capm_options.max_segment = float(max_segment);
@@ -1098,8 +1099,8 @@ return the shading point (knit/shading.h).
 
 KnitMaterial(pattern, stitch=StitchParams(), bsdf=None, ply=None,
 mode='near_field', capm=True, ply_detail=True, footprint_points=16,
-footprint_table=True, uv_scale=40.0, max_steps=32, max_segment=6.2832,
-max_bend=0.05)
+footprint_table=True, self_shadowing=True, uv_scale=40.0, max_steps=32,
+max_segment=6.2832, max_bend=0.05)
 
 bsdf: a YarnBSDF or a dict of its keyword arguments (None: defaults); it
 needs a colour for every colour index the pattern uses. ply: a PlyProfile or
@@ -1108,7 +1109,9 @@ CAPM ray) or 'multi_scale' (footprint aggregation, p_delta, LEAN-widened
 roughness, mixed colours). footprint_table: multi-scale footprints of a
 stitch cell or more are aggregated from a per-class table built here
 (docs/multiscale.md) instead of CAPM marches (not for patterns with slip
-stitches). capm=False: no parallax, the
+stitches). self_shadowing: near field, light and bounced rays from a yarn
+hit cross the rest of the yarn shell (KnitMaterial.occluded_from,
+shade_from) before they leave it. capm=False: no parallax, the
 height query at the hit's (u, v). uv_scale: pattern units per UV unit. max_steps, max_segment,
 max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
   knit_material
@@ -1116,7 +1119,7 @@ max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
            ::py::kw_only(), ::py::arg("bsdf") = ::py::none(), ::py::arg("ply") = ::py::none(),
            ::py::arg("mode") = "near_field", ::py::arg("capm") = true,
            ::py::arg("ply_detail") = true, ::py::arg("footprint_points") = 16,
-           ::py::arg("footprint_table") = true, ::py::arg("uv_scale") = 40.0, ::py::arg("max_steps") = 32,
+           ::py::arg("footprint_table") = true, ::py::arg("self_shadowing") = true, ::py::arg("uv_scale") = 40.0, ::py::arg("max_steps") = 32,
            ::py::arg("max_segment") = 6.2832, ::py::arg("max_bend") = 0.05)
       .def_property_readonly("pattern",
                              [](const KnitMaterial& km) { return km.surface().pattern(); })
@@ -1136,6 +1139,8 @@ max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
                              [](const KnitMaterial& km) { return km.params().footprint_points; })
       .def_property_readonly("footprint_table",
                              [](const KnitMaterial& km) { return km.params().footprint_table; })
+      .def_property_readonly("self_shadowing",
+                             [](const KnitMaterial& km) { return km.params().self_shadowing; })
       .def_property_readonly("uv_scale",
                              [](const KnitMaterial& km) { return km.params().uv_scale; })
       .def_property_readonly(

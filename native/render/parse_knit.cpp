@@ -209,6 +209,7 @@ KnitDesc parse_knit_material(JsonObject& o, const std::string& dir) {
   mp.capm = o.boolean("capm", mp.capm);
   mp.footprint_points = static_cast<int>(o.integer("footprint_points", 1, KNIT_MS_MAX_POINTS, mp.footprint_points));
   mp.footprint_table = o.boolean("footprint_table", mp.footprint_table);
+  mp.self_shadowing = o.boolean("self_shadowing", mp.self_shadowing);
   if (auto c = o.get("capm_options")) {
     JsonObject co(*c);
     mp.capm_options.max_steps = static_cast<int>(co.integer("max_steps", 1, 4096, mp.capm_options.max_steps));

@@ -132,7 +132,7 @@ k::KnitCapm KnitMaterial::march_from(const BaseHit& hit, const KnitShade& from, 
 
 bool KnitMaterial::occluded_from(const BaseHit& hit, const KnitShade& from, Vec3 dir_world,
                                  const FrameProvider* frame) const {
-  if (!from.in_shell) return false;
+  if (!from.in_shell || !params_.self_shadowing) return false;
   return march_from(hit, from, dir_world, frame).state == KNIT_CAPM_HIT;
 }
 
@@ -143,7 +143,7 @@ KnitShade KnitMaterial::shade_from(const BaseHit& hit, const KnitShade& from, Ve
   sh.spec_r = k::bsdf_mf_make(bp.roughness_x, bp.roughness_y, bp.eta);
   sh.spec_t = k::bsdf_mf_make(bp.trans_roughness_x, bp.trans_roughness_y, bp.eta);
   sh.from_back = from.from_back;
-  if (!from.in_shell) return sh;
+  if (!from.in_shell || !params_.self_shadowing) return sh;
   const k::KnitCapm st = march_from(hit, from, dir_world, frame);
   sh.steps = st.steps;
   if (st.state != KNIT_CAPM_HIT) {

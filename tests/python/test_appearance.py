@@ -855,6 +855,8 @@ class KnitMaterialInterface(unittest.TestCase):
         self.assertEqual((d.mode, d.capm, d.ply_detail, d.footprint_points), ("near_field", True, True, 16))
         self.assertTrue(d.footprint_table)
         self.assertFalse(knitshade.KnitMaterial(knitshade.Pattern(), footprint_table=False).footprint_table)
+        self.assertTrue(d.self_shadowing)
+        self.assertFalse(knitshade.KnitMaterial(knitshade.Pattern(), self_shadowing=False).self_shadowing)
         self.assertAlmostEqual(d.uv_scale, 40.0)
         # bsdf and ply as dicts of keyword arguments
         m2 = knitshade.KnitMaterial(knitshade.Pattern(), bsdf=dict(eta=1.2), ply=dict(ply_count=2))

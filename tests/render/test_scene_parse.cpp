@@ -196,6 +196,8 @@ TEST(SceneParse, KnitParameterRanges) {
   EXPECT_NE(knit_error("mode", "far").find("materials.wool.mode: must be one of \"near_field\", \"multi_scale\""),
             std::string::npos);
   EXPECT_NE(knit_error("capm", 1).find("materials.wool.capm: must be true or false, got number"), std::string::npos);
+  EXPECT_NE(knit_error("self_shadowing", "yes").find("materials.wool.self_shadowing: must be true or false"),
+            std::string::npos);
   EXPECT_NE(knit_error("footprint_points", 0).find("materials.wool.footprint_points: must be in [1, 64], got 0"),
             std::string::npos);
   EXPECT_NE(knit_error("bsdf", {{"roughness_x", 0}}).find("materials.wool.bsdf.roughness_x: must be in (0, 1], got 0"),
@@ -230,7 +232,8 @@ TEST(SceneParse, KnitMaterialMapsOntoTheModel) {
       "bsdf": {"roughness_x": 0.2, "roughness_y": 0.5, "trans_roughness_x": 0.35, "trans_roughness_y": 0.65,
                "eta": 1.4, "body_energy": 0.9, "body_reflect": 0.3, "optical_depth": 2},
       "ply": {"ply_count": 2, "ply_twist": 45, "fiber_count": 20, "fiber_twist": -10},
-      "mode": "multi_scale", "capm": false, "footprint_points": 8, "frames": "curvature", "explicit_samples": 12})");
+      "mode": "multi_scale", "capm": false, "footprint_points": 8, "frames": "curvature", "explicit_samples": 12,
+      "footprint_table": false, "self_shadowing": false})");
   const SceneDesc d = parse(j);
   const KnitDesc& k = d.materials[1].knit;
   ASSERT_TRUE(k.model);
@@ -259,6 +262,8 @@ TEST(SceneParse, KnitMaterialMapsOntoTheModel) {
   EXPECT_EQ(p.mode, knit::KnitMode::MultiScale);
   EXPECT_FALSE(p.capm);
   EXPECT_EQ(p.footprint_points, 8);
+  EXPECT_FALSE(p.footprint_table);
+  EXPECT_FALSE(p.self_shadowing);
   EXPECT_EQ(k.frames, KnitFrames::Curvature);
   EXPECT_EQ(k.explicit_samples, 12);
   EXPECT_EQ(k.model->surface().pattern().cols(), 2);
