@@ -22,7 +22,9 @@
  * crossed at about the same angle, so the transmittances multiply:
  *   tau = tau_1 ^ n,  n = clamp(layers, 1, KB_MAX_LAYERS)
  * n = 2 is the paper's double layer (overlapping yarns, tau_1^2); knit
- * interlocks can stack more loops, up to 4 are compounded.
+ * interlocks can stack more loops, up to 4 are compounded. A host that
+ * traces the other yarns itself (the native renderer's self-shadowing,
+ * docs/renderer.md) passes n = 1: they already block the path.
  * Why this form: it is the exact ballistic transmittance of a homogeneous
  * round yarn for the entry point at hand, it needs no table, it is cheap
  * (one exp) and tau <= 1 always, so it can only remove energy.

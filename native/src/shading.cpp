@@ -322,8 +322,13 @@ void KnitMaterial::shade_yarn(const BaseHit& hit, const k::KnitLineHit& h, const
   const float top = surface_.shell_top();
   sh.p_yarn = h.p;
   sh.pass_through = false;
-  sh.point.layers =
-      std::max(1, k::knit_vertical_layers(surface_.geom(), surface_.codes(), surface_.colors(), h.p.x, h.p.y));
+  // The layer count compounds the attenuation for the yarns under the hit
+  // that transmitted light also crosses. With self-shadowing those yarns are
+  // in the path (they block it, as explicit tubes do): one layer, no count.
+  sh.point.layers = sh.in_shell && params_.self_shadowing
+                        ? 1
+                        : std::max(1, k::knit_vertical_layers(surface_.geom(), surface_.codes(), surface_.colors(),
+                                                             h.p.x, h.p.y));
   set_colors(sh, h.colour);
   // Base frame at the yarn hit.
   Vec3 ft = hit.t, fb = hit.b, fn = hit.n;
