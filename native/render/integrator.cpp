@@ -24,7 +24,7 @@ struct PathState {
 }  // namespace
 
 Rgb PathIntegrator::shadow_transmittance(Vec3 origin, Vec3 dir, float tmax, PathStats& stats,
-                                         Sampler& sampler) const {
+                                         Sampler& sampler, float cone_width, float cone_spread) const {
   if (!scene_.has_pass_through()) {
     ++stats.shadow_rays;
     Ray r;
@@ -48,6 +48,7 @@ Rgb PathIntegrator::shadow_transmittance(Vec3 origin, Vec3 dir, float tmax, Path
     const Material& m = scene_.material(si.material);
     if (!m.can_pass_through()) return {};
     if (m.resolves_hits()) ++stats.shadow_resolves;
+    si.cone_width = cone_width + dot(si.p - origin, dir) * cone_spread;
     tr *= m.transmittance(si, dir, sampler);
     if (tr.is_black()) return {};
     r.o = offset_ray_origin(si.p, si.ng, dir);
@@ -92,7 +93,9 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
       mat = &scene_.material(si.material);
     } else {
       si = SurfaceInteraction{};
-      if (!scene_.accel().intersect(ray, si)) {
+      const bool found = scene_.accel().intersect(ray, si);
+      si.cone_width = ray.cone_width + si.t * ray.cone_spread;
+      if (!found) {
         if (const Light* env = scene_.environment()) {
           const Rgb le = env->environment(ray.d);
           if (!le.is_black()) radiance += beta * le * emission_weight(scene_.environment_index(), ray.d, nullptr);
@@ -137,6 +140,8 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
       next.o = offset_ray_origin(si.p, si.ng, ray.d);
       next.d = ray.d;
       differentials_pass_through(ray, si, next);
+      next.cone_width = si.cone_width;
+      next.cone_spread = ray.cone_spread;
       ray = next;
       ++stats.bounce_rays;
       continue;  // not a bounce
@@ -168,7 +173,7 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
           if (tmax > 0) {
             // Yarn between the shading point and the shell's surface first.
             Rgb tr = resolves ? m.self_transmittance(si, dir) : Rgb(1.0f);
-            if (!tr.is_black()) tr *= shadow_transmittance(origin, dir, tmax, stats, sampler);
+            if (!tr.is_black()) tr *= shadow_transmittance(origin, dir, tmax, stats, sampler, si.cone_width, ray.cone_spread);
             if (!tr.is_black()) {
               float w = 1.0f;
               if (!ls.delta && strategy == Strategy::Mis)
@@ -204,6 +209,7 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
       ray.o = si.p;
       ray.d = wi;
       ray.has_differentials = false;
+      ray.cone_width = si.cone_width;
       inside = true;
       ++stats.shell_bounces;
       continue;
@@ -211,6 +217,8 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
     RayDifferential next;
     next.o = offset_ray_origin(si.p, si.ng, wi);
     next.d = wi;
+    next.cone_width = si.cone_width;
+    next.cone_spread = ray.cone_spread;
     if (bs.is_delta()) differentials_specular(ray, si, bs, next);
     ray = next;
     ++stats.bounce_rays;

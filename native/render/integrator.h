@@ -54,7 +54,10 @@ class PathIntegrator {
   // infinite lights): 0 when blocked, the product of pass-through
   // transmittances otherwise.
   // Stochastic transmittances (the knit model) draw from `sampler`.
-  Rgb shadow_transmittance(Vec3 origin, Vec3 dir, float tmax, PathStats& stats, Sampler& sampler) const;
+  // cone_width, cone_spread: the path's ray cone at the origin
+  // (RayDifferential), for materials that shade by footprint.
+  Rgb shadow_transmittance(Vec3 origin, Vec3 dir, float tmax, PathStats& stats, Sampler& sampler,
+                           float cone_width = 0, float cone_spread = 0) const;
 
  private:
   const Scene& scene_;

@@ -43,6 +43,9 @@ struct SurfaceInteraction {
   bool has_uv = false;
   float t = 0;   // ray distance
   Footprint footprint;
+  // Width of one pixel's footprint here from the ray's cone
+  // (RayDifferential::cone_width; set by the integrator, 0 when unknown).
+  float cone_width = 0;
   unsigned geom_id = 0, prim_id = 0;
   int material = -1;  // index into the scene's materials, -1 for lights
   int light = -1;     // index into the scene's lights when the surface emits

@@ -143,8 +143,8 @@ const knit::KnitMaterial& KnitModelMaterial::model_for(const knit::BaseHit& h) c
 PassThrough KnitModelMaterial::resolve(SurfaceInteraction& si, const RayDifferential& ray, Sampler& sampler) const {
   PassThrough pt;
   const Vec2 shift = sampler.get2d();
-  const knit::BaseHit hit = base_hit(si, ray.diff_scale);
-  const knit::KnitMaterial& model = model_for(hit);
+  knit::BaseHit hit = base_hit(si, ray.diff_scale);
+  const knit::KnitMaterial& model = cone_footprint(si, ray.d, hit) ? *model_ : model_for(hit);
   const knit::KnitShade sh = model.shade(hit, to_kvec(ray.d), frame_.get(), {shift.x, shift.y});
   if (sh.pass_through) {
     pt.pass = true;  // no yarn along this ray: it goes on straight
@@ -174,6 +174,28 @@ void KnitModelMaterial::apply_shade(SurfaceInteraction& si, const knit::KnitShad
   si.yarn.from_back = sh.from_back;
   si.yarn.shell_p = sh.p_yarn;
   si.yarn.base = base;
+}
+
+bool KnitModelMaterial::cone_footprint(const SurfaceInteraction& si, Vec3 dir, knit::BaseHit& hit) const {
+  if (!point_model_ || si.footprint.valid || !(si.cone_width > 0) || !model_->footprint_table()) return false;
+  const float w = si.cone_width * footprint_scale_;
+  // Across the ray's projection the footprint is w wide, along it w / cos.
+  const Vec3 d = si.shading.to_local(dir);
+  const float c = std::max(std::fabs(d.z), 0.125f);
+  const float lt = std::sqrt(d.x * d.x + d.y * d.y);
+  const float e1x = lt > 1e-6f ? d.x / lt : 1.0f, e1y = lt > 1e-6f ? d.y / lt : 0.0f;
+  const float S = hit.pattern_per_world, us = model_->params().uv_scale;
+  const float a = S * w / c, b = S * w;  // pattern units
+  const float fxx = a * e1x, fxy = a * e1y, fyx = -b * e1y, fyy = b * e1x;
+  const knit::KnitSurface& s = model_->surface();
+  const float ex = (std::fabs(fxx) + std::fabs(fyx)) / s.cell_width();
+  const float ey = (std::fabs(fxy) + std::fabs(fyy)) / s.geom().row_spacing;
+  if (!(ex >= 1 && ey >= 1)) return false;
+  hit.dudx = fxx / us;
+  hit.dvdx = fxy / us;
+  hit.dudy = fyx / us;
+  hit.dvdy = fyy / us;
+  return true;
 }
 
 knit::BaseHit KnitModelMaterial::shell_base_hit(const SurfaceInteraction& si) const {
@@ -208,8 +230,9 @@ bool KnitModelMaterial::bounce_inside(SurfaceInteraction& si, Vec3 wi) const {
 
 Rgb KnitModelMaterial::transmittance(const SurfaceInteraction& si, Vec3 w, Sampler& sampler) const {
   const Vec2 shift = sampler.get2d();
-  const knit::BaseHit hit = base_hit(si);
-  return Rgb(model_for(hit).transmittance(hit, to_kvec(w), frame_.get(), {shift.x, shift.y}));
+  knit::BaseHit hit = base_hit(si);
+  const knit::KnitMaterial& model = cone_footprint(si, w, hit) ? *model_ : model_for(hit);
+  return Rgb(model.transmittance(hit, to_kvec(w), frame_.get(), {shift.x, shift.y}));
 }
 
 }  // namespace knit::render

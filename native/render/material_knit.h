@@ -86,6 +86,11 @@ class KnitModelMaterial final : public YarnShadedMaterial {
   // of a hit resolved inside the shell (si.yarn.in_shell), for marching on from it.
   const knit::KnitMaterial& near_model() const { return point_model_ ? *point_model_ : *model_; }
   knit::BaseHit shell_base_hit(const SurfaceInteraction& si) const;
+  // Multi-scale, for a hit without differentials (past a diffuse bounce):
+  // the footprint of the ray's cone (RayDifferential::cone_width) put into
+  // `hit`, when it covers a stitch cell or more in both directions (the
+  // class table's domain). False otherwise (the hit is then a point).
+  bool cone_footprint(const SurfaceInteraction& si, Vec3 dir, knit::BaseHit& hit) const;
   static knit::KnitShade shell_shade(const SurfaceInteraction& si);
   // Sets si's shading frame and yarn BSDF from a resolved shade.
   void apply_shade(SurfaceInteraction& si, const knit::KnitShade& sh, const knit::KnitMaterial& model) const;

@@ -22,6 +22,12 @@ struct RayDifferential : Ray {
   // The offsets are this many pixels apart (the camera scales them with the
   // sample count; the knit model rescales its footprint to whole pixels).
   float diff_scale = 1.0f;
+  // Past a non-specular bounce, where there are no differentials: the width
+  // one pixel's footprint has at ray distance t is about
+  // cone_width + t cone_spread (world units), as for a camera ray of the
+  // path's length (pbrt-v4 approximates the footprint the same way after
+  // such bounces). cone_spread 0: unknown.
+  float cone_width = 0, cone_spread = 0;
 };
 
 }  // namespace knit::render

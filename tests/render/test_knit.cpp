@@ -226,6 +226,76 @@ void expect_white_furnace(const RgbImage& img, const char* what) {
   EXPECT_LT(worst_block, 0.03) << what;
 }
 
+// Multi-scale past a diffuse bounce (no differentials): the ray's cone
+// (RayDifferential::cone_width) gives the footprint; a cone covering stitch
+// cells is shaded from the class table, a narrow one (or none) as a point.
+TEST(KnitModelHits, BounceRaysUseTheClassTableWhenTheirConeCoversCells) {
+  KnitDesc desc;
+  desc.model = knit_model("K", 40.0f, knit::KnitMode::MultiScale);
+  ASSERT_NE(desc.model->footprint_table(), nullptr);
+  auto quad = std::make_shared<const TriangleMesh>(load_mesh(mesh("quad.obj")));
+  Warnings warnings;
+  const KnitModelMaterial m(desc, quad, "scene.json", "materials.wool", "objects[0]", "quad", warnings);
+  const Vec3 d = normalize(Vec3(0.3f, 0.2f, -1.0f));
+  auto shade = [&](float cone_width, float cone_spread, int seed, bool& passed) {
+    SurfaceInteraction si;
+    si.p = Vec3(0.05f, 0.1f, 0.0f);
+    si.ng = Vec3(0, 0, 1);
+    si.shading = Frame::from_normal_tangent(Vec3(0, 0, 1), Vec3(1, 0, 0));
+    // points spread over many cells (40 pattern units per UV unit)
+    const float fu = 0.618034f * float(seed), fv = 0.754878f * float(seed);
+    si.uv = Vec2(0.3f + 0.4f * (fu - std::floor(fu)), 0.3f + 0.4f * (fv - std::floor(fv)));
+    si.has_uv = true;
+    si.prim_id = 0;
+    si.t = 2.0f;
+    RayDifferential ray;
+    ray.o = si.p - d * si.t;
+    ray.d = d;
+    ray.cone_width = cone_width;
+    ray.cone_spread = cone_spread;
+    si.cone_width = cone_width + si.t * cone_spread;  // as the integrator sets it
+    Sampler sampler(7, 0, static_cast<uint64_t>(seed));
+    passed = m.resolve(si, ray, sampler).pass;
+    return si;
+  };
+  const float base_alpha = desc.model->params().bsdf.roughness_x;
+  int table_passes = 0, point_passes = 0;
+  double table_alpha = 0, point_alpha = 0;
+  int table_hits = 0, point_hits = 0;
+  for (int i = 0; i < 400; ++i) {
+    bool pass = false;
+    // A cone 0.2 wide at the hit: 8 pattern units (40 per world unit), more
+    // than a cell (2 pi x 4.5) both ways.
+    const SurfaceInteraction wide = shade(0.0f, 0.1f, i, pass);
+    table_passes += pass;
+    if (!pass) {
+      ++table_hits;
+      table_alpha += wide.yarn.bsdf.spec_r.alpha_x;
+      EXPECT_FALSE(wide.yarn.in_shell);  // an aggregate, not a point in the shell
+    }
+    const SurfaceInteraction narrow = shade(0.0f, 1e-4f, i, pass);
+    point_passes += pass;
+    if (!pass) {
+      ++point_hits;
+      point_alpha += narrow.yarn.bsdf.spec_r.alpha_x;
+      EXPECT_TRUE(narrow.yarn.in_shell);
+    }
+  }
+  ASSERT_GT(table_hits, 100);
+  ASSERT_GT(point_hits, 100);
+  // The table's aggregate widens the specular lobe by the slopes it averages; a point does not.
+  EXPECT_GT(table_alpha / table_hits, 1.5 * base_alpha);
+  EXPECT_NEAR(point_alpha / point_hits, base_alpha, 1e-4);
+  // Both let through about the fraction of rays that miss the yarn (p_delta).
+  EXPECT_NEAR(double(table_passes) / 400, double(point_passes) / 400, 0.1);
+  // No cone at all: a point.
+  bool pass = false;
+  for (int i = 0; i < 20; ++i) {
+    const SurfaceInteraction none = shade(0.0f, 0.0f, i, pass);
+    if (!pass) EXPECT_TRUE(none.yarn.in_shell);
+  }
+}
+
 TEST(KnitFurnace, NearField) {
   const auto r = test::render_text(test::test_dir(), furnace_scene("near_field", false));
   EXPECT_EQ(r.result.stats.invalid_samples, 0u);
