@@ -1098,7 +1098,7 @@ geometry (CAPM or the flat height query, near field or multi-scale) and
 return the shading point (knit/shading.h).
 
 KnitMaterial(pattern, stitch=StitchParams(), bsdf=None, ply=None,
-mode='near_field', capm=True, ply_detail=True, footprint_points=16,
+mode='near_field', capm=True, ply_detail=True, footprint_points=4,
 footprint_table=True, self_shadowing=True, uv_scale=40.0, max_steps=32,
 max_segment=6.2832, max_bend=0.05)
 
@@ -1118,7 +1118,7 @@ max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
       .def(::py::init(&make_material), ::py::arg("pattern"), ::py::arg("stitch") = StitchParams{},
            ::py::kw_only(), ::py::arg("bsdf") = ::py::none(), ::py::arg("ply") = ::py::none(),
            ::py::arg("mode") = "near_field", ::py::arg("capm") = true,
-           ::py::arg("ply_detail") = true, ::py::arg("footprint_points") = 16,
+           ::py::arg("ply_detail") = true, ::py::arg("footprint_points") = 4,
            ::py::arg("footprint_table") = true, ::py::arg("self_shadowing") = true, ::py::arg("uv_scale") = 40.0, ::py::arg("max_steps") = 32,
            ::py::arg("max_segment") = 6.2832, ::py::arg("max_bend") = 0.05)
       .def_property_readonly("pattern",

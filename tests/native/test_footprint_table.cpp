@@ -208,6 +208,7 @@ TEST(FootprintTable, HugeFootprintsStayBounded) {
 TEST(FootprintTable, FootprintsBelowACellMarchPointsInProportionToTheirArea) {
   KnitMaterialParams mp;
   mp.mode = KnitMode::MultiScale;
+  mp.footprint_points = 16;
   KnitMaterial m(seed(), mp);
   const float cell = 6.2831853f * m.surface().geom().row_spacing;
   BaseHit hit;

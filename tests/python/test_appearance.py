@@ -762,11 +762,18 @@ class KnitMaterialMultiScale(unittest.TestCase):
         u, v = self.rng.uniform(0, 40, n), self.rng.uniform(0, 40, n)
         wi = direction(35)
         sh = self.m.shade(u, v, -wi, footprint=[2.5, 0.0, 0.0, 2.0], shift=[0.3, 0.7])
-        # Below a stitch cell the material marches the share of its 16 points
-        # that the footprint's area covers.
+        # Below a stitch cell the material marches the share of its
+        # footprint_points that the footprint's area covers (at least one).
         cell = 2 * math.pi * (self.stitch.h + 0.5)
-        points = math.ceil(16 * 2.5 * 2.0 / cell)
-        self.assertEqual(points, 3)
+        self.assertEqual(self.m.footprint_points, 4)
+        points = math.ceil(self.m.footprint_points * 2.5 * 2.0 / cell)
+        self.assertEqual(points, 1)
+        many = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0,
+                                      footprint_points=16)
+        self.assertEqual(math.ceil(16 * 2.5 * 2.0 / cell), 3)
+        sh16 = many.shade(u, v, -wi, footprint=[2.5, 0.0, 0.0, 2.0], shift=[0.3, 0.7])
+        ag16 = self.surf.aggregate(u, v, [2.5, 0.0], [0.0, 2.0], wi, 3, 0.3, 0.7)
+        np.testing.assert_array_equal(sh16["p_delta"][~sh16["pass_through"]], ag16["p_delta"][~sh16["pass_through"]])
         ag = self.surf.aggregate(u, v, [2.5, 0.0], [0.0, 2.0], wi, points, 0.3, 0.7)
         np.testing.assert_array_equal(sh["p_delta"][~sh["pass_through"]], ag["p_delta"][~sh["pass_through"]])
         np.testing.assert_array_equal(sh["pass_through"], ag["hits"] == 0)
@@ -785,7 +792,7 @@ class KnitMaterialMultiScale(unittest.TestCase):
         m = marched.shade(u, v, -wi, footprint=fp, shift=[0.3, 0.7])
         self.assertTrue(np.all(t["steps"] == 0))
         self.assertTrue(np.all(m["steps"] > 0))
-        ag = self.surf.aggregate(u, v, fp[:2], fp[2:], wi, 16, 0.3, 0.7)
+        ag = self.surf.aggregate(u, v, fp[:2], fp[2:], wi, marched.footprint_points, 0.3, 0.7)
         np.testing.assert_array_equal(m["p_delta"], ag["p_delta"])
         # One shift places every footprint's points alike; with random shifts
         # the marched p_delta is unbiased, and the table's should match it.
@@ -857,7 +864,7 @@ class KnitMaterialInterface(unittest.TestCase):
         self.assertEqual(m.pattern, seed_pattern())
         self.assertAlmostEqual(m.shell_top, 1.0 + 0.6, places=5)
         d = knitshade.KnitMaterial(knitshade.Pattern())
-        self.assertEqual((d.mode, d.capm, d.ply_detail, d.footprint_points), ("near_field", True, True, 16))
+        self.assertEqual((d.mode, d.capm, d.ply_detail, d.footprint_points), ("near_field", True, True, 4))
         self.assertTrue(d.footprint_table)
         self.assertFalse(knitshade.KnitMaterial(knitshade.Pattern(), footprint_table=False).footprint_table)
         self.assertTrue(d.self_shadowing)

@@ -31,7 +31,7 @@ struct KnitMaterialParams {
   bool ply_detail = true;       // wrap the ply/fibre profile around the yarn
   KnitMode mode = KnitMode::NearField;
   bool capm = true;             // false: no parallax, the height query at the hit's (u, v)
-  int footprint_points = 16;    // multi-scale Sobol' points per cell-sized footprint (docs/multiscale.md)
+  int footprint_points = 4;     // multi-scale Sobol' points per cell-sized footprint (docs/multiscale.md)
   bool footprint_table = true;  // multi-scale footprints of a cell or more: the class table, not marches
   bool self_shadowing = true;   // near field: light and bounces from a yarn hit cross the rest of the shell
   float uv_scale = 40.0f;       // pattern units per UV unit (x = uv_scale u, y = uv_scale v)
