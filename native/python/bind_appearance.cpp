@@ -1163,8 +1163,9 @@ pass_through (bool: no yarn on this ray, continue straight on), from_back
 (bool: the ray reached the fabric from behind the mesh), st, sb, sn ((N, 3)
 world shading frame: yarn tangent, bitangent, surface normal; express wo, wi
 in it for YarnBSDF), offset ((N, 3) world offset from the base hit to the
-yarn hit), color (palette index; multi-scale: the most frequent one), layers,
-shadow (G_{p,f}), p_delta (multi-scale: fraction of the footprint passing
+yarn hit), color (palette index; multi-scale: the most frequent one), layers
+(tubes under the hit, for the double-layer attenuation; 1 in the near field
+with self_shadowing, where the renderer traces those tubes), shadow (G_{p,f}), p_delta (multi-scale: fraction of the footprint passing
 through; near field 0), kd_r, kd_t ((N, 3) body colours; multi-scale: mixed
 over the footprint), alpha ((N, 4): specular reflection alpha_x, alpha_y,
 specular transmission alpha_x, alpha_y; multi-scale: LEAN-widened), steps
