@@ -99,8 +99,10 @@ bool Accel::intersect(const RayDifferential& ray, SurfaceInteraction& si) const 
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(scene_, &ctx, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-  const GeometryRecord& rec = records_[rh.hit.geomID];
-  si.geom_id = rh.hit.geomID;
+  // Shapes attached as an instance (CurveShape) are recorded under the instance's id.
+  const unsigned id = rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID ? rh.hit.instID[0] : rh.hit.geomID;
+  const GeometryRecord& rec = records_[id];
+  si.geom_id = id;
   si.material = rec.material;
   si.light = rec.light;
   rec.shape->interaction(ray, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v, si);

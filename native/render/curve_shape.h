@@ -9,6 +9,7 @@
 #pragma once
 
 #include <memory>
+#include <vector>
 
 #include "render/shape.h"
 #include "render/yarn_tubes.h"
@@ -25,10 +26,15 @@ class CurveShape final : public Shape {
   size_t num_primitives() const override { return tubes_->segments.size(); }
   void bounds(Vec3& lo, Vec3& hi) const override;
   const YarnTubes& tubes() const { return *tubes_; }
+  // Embree sees the tubes scaled by this factor, inside an instance that
+  // scales them back (see attach).
+  float embree_scale() const { return embree_scale_; }
 
  private:
   Vec3 tangent_at(size_t seg, size_t end) const;
   std::shared_ptr<const YarnTubes> tubes_;
+  std::vector<float> scaled_;  // the vertices as Embree sees them
+  float embree_scale_ = 1;
 };
 
 }  // namespace knit::render

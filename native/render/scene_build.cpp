@@ -160,7 +160,8 @@ Scene::Scene(const SceneDesc& desc, const BuildOptions& options, Warnings& warni
       stats_.yarn_points += tubes->num_points();
       stats_.yarn_segments += tubes->segments.size();
       stats_.yarn_curves += tubes->curves;
-      stats_.yarn_geometry_bytes += tubes->geometry_bytes();
+      // (twice the vertices: the scaled copy Embree sees, CurveShape::attach)
+      stats_.yarn_geometry_bytes += tubes->geometry_bytes() + tubes->vertices.size() * sizeof(float);
       stats_.yarn_shading_bytes += tubes->shading_bytes();
       accel_->add(std::make_unique<CurveShape>(tubes), it->second, -1);
       has_pass_through_ = true;

@@ -296,6 +296,36 @@ TEST(KnitModelHits, BounceRaysUseTheClassTableWhenTheirConeCoversCells) {
   }
 }
 
+// Explicit yarns do not depend on the scene's absolute scale: a black
+// swatch seen straight down under a white sky lets through the same light
+// whether its tubes have radius 0.02 or 2e-4 world units (Embree 3 alone
+// gets the thin ones wrong; CurveShape::attach instances them scaled up),
+// and as much as the model does.
+TEST(YarnTubes, ThinTubesLetThroughWhatThickOnesDo) {
+  auto scene = [](double scale) {
+    char buf[1400];
+    std::snprintf(buf, sizeof buf, R"({
+      "film": {"width": 24, "height": 24, "spp": 16, "seed": 3},
+      "camera": {"position": [%g, %g, %g], "look_at": [%g, %g, 0], "fov": 10},
+      "lights": [{"type": "environment", "color": [1, 1, 1]}],
+      "materials": {"m": {"type": "knit", "pattern": ["KP"], "uv_scale": 40, "yarn_colors": [[0, 0, 0]],
+                          "bsdf": {"body_energy": 0.0001}, "ply": {"enabled": false}}},
+      "objects": [{"mesh": "%s", "material": "m", "transform": {"scale": %g}}]})",
+                  0.05 * scale, 0.1 * scale, scale, 0.05 * scale, 0.1 * scale, mesh("quad.obj").c_str(), scale);
+    return std::string(buf);
+  };
+  BuildOptions tubes;
+  tubes.explicit_yarns = true;
+  const std::string dir = test::test_dir();
+  const double thick = test::mean_channel_value(test::render_text(dir, scene(1.0), 0, tubes).image);
+  const double thin = test::mean_channel_value(test::render_text(dir, scene(0.01), 0, tubes).image);
+  const double model = test::mean_channel_value(test::render_text(dir, scene(0.01)).image);
+  std::printf("[thin tubes] light through: radius 0.02 %.4f, radius 2e-4 %.4f, model %.4f\n", thick, thin, model);
+  EXPECT_GT(thick, 0.3);
+  EXPECT_NEAR(thin, thick, 0.02);
+  EXPECT_NEAR(model, thick, 0.03);
+}
+
 TEST(KnitFurnace, NearField) {
   const auto r = test::render_text(test::test_dir(), furnace_scene("near_field", false));
   EXPECT_EQ(r.result.stats.invalid_samples, 0u);
