@@ -18,8 +18,9 @@ summary) to OUT_DIR.
 
   /usr/bin/python3 scripts/bench_knit.py BUILD_DIR OUT_DIR [--quick] [--paper-far-view] [--only PARTS]
 
-PARTS: comma-separated, of half_cylinder, garment, far_view, overhead (all
-by default; --paper-far-view adds the environment-only far views).
+PARTS: comma-separated, of half_cylinder, garment, garment_alone, far_view,
+overhead (all by default; --paper-far-view adds the environment-only far
+views).
 
 On the garment (the scarf over a bar, on a floor) the error is measured twice:
 over the whole image, where the floor and bar's lighting noise (the same for
@@ -197,7 +198,7 @@ def main():
         sys.exit(2)
     quick = "--quick" in sys.argv
     b = Bench(sys.argv[1], sys.argv[2], quick)
-    parts = {"half_cylinder", "garment", "far_view", "overhead"}
+    parts = {"half_cylinder", "garment", "garment_alone", "far_view", "overhead"}
     if "--only" in sys.argv:
         parts = set(sys.argv[sys.argv.index("--only") + 1].split(","))
     size = 64 if quick else 128
@@ -241,6 +242,18 @@ def main():
         b.results["garment_scarf_multi_scale_fabric"] = b.equal_quality(
             "garment_ms_fabric", multi_scale(scarf), scarf, "model_multi_scale", "explicit", ladder, ref_spp,
             explicit_b=True, tag_a="garment_ms_model_multi_scale", tag_b="garment_explicit", mask=fabric)
+
+    # 2c. The garment alone: the scarf in the same view and light, without
+    # the floor and the bar, whose paths cost the same for every scarf model
+    # and bound the speed-up of 2 (docs/results.md).
+    if "garment_alone" in parts:
+        alone = json.loads(json.dumps(scarf))
+        alone["objects"] = [o for o in alone["objects"] if o.get("name") == "scarf"]
+        b.results["garment_alone"] = b.equal_quality("garment_alone", alone, alone, "model", "explicit", ladder,
+                                                     ref_spp, explicit_b=True)
+        b.results["garment_alone_multi_scale"] = b.equal_quality(
+            "garment_alone_ms", multi_scale(alone), alone, "model_multi_scale", "explicit", ladder, ref_spp,
+            explicit_b=True, tag_b="garment_alone_explicit")
 
     # 3. Far view: multi-scale against near field (the flat swatch far away).
     far = sized(load("swatch_far.json"), size, int(size * 0.75))
