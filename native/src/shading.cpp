@@ -136,12 +136,17 @@ bool KnitMaterial::occluded_from(const BaseHit& hit, const KnitShade& from, Vec3
   return march_from(hit, from, dir_world, frame).state == KNIT_CAPM_HIT;
 }
 
-KnitShade KnitMaterial::shade_from(const BaseHit& hit, const KnitShade& from, Vec3 dir_world,
-                                   const FrameProvider* frame) const {
+KnitShade KnitMaterial::unshaded() const {
   KnitShade sh;
   const YarnBsdfParams& bp = params_.bsdf;
   sh.spec_r = k::bsdf_mf_make(bp.roughness_x, bp.roughness_y, bp.eta);
   sh.spec_t = k::bsdf_mf_make(bp.trans_roughness_x, bp.trans_roughness_y, bp.eta);
+  return sh;
+}
+
+KnitShade KnitMaterial::shade_from(const BaseHit& hit, const KnitShade& from, Vec3 dir_world,
+                                   const FrameProvider* frame) const {
+  KnitShade sh = unshaded();
   sh.from_back = from.from_back;
   if (!from.in_shell || !params_.self_shadowing) return sh;
   const k::KnitCapm st = march_from(hit, from, dir_world, frame);
@@ -210,10 +215,8 @@ void KnitMaterial::set_colors(KnitShade& sh, int color_index) const {
 
 KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
                               std::array<float, 2> shift) const {
-  KnitShade sh;
+  KnitShade sh = unshaded();
   const YarnBsdfParams& bp = params_.bsdf;
-  sh.spec_r = k::bsdf_mf_make(bp.roughness_x, bp.roughness_y, bp.eta);
-  sh.spec_t = k::bsdf_mf_make(bp.trans_roughness_x, bp.trans_roughness_y, bp.eta);
   const float S = hit.pattern_per_world;
   const float x = params_.uv_scale * hit.u, y = params_.uv_scale * hit.v;
   const Vec3 wi = k::kv3_neg(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n));

@@ -21,26 +21,44 @@ KnitMaterialParams flat_params(float uv_scale = 1) {
   return p;
 }
 
+// A view ray entering sc's window at a random point, at up to max_theta
+// from the normal: the explicit tubes' first hit and the material's shading.
+struct ViewSample {
+  double x = 0, y = 0;
+  D3 d{};
+  TubeHit gt;
+  BaseHit bh;
+  KnitShade sh;
+};
+ViewSample view_sample(const GroundTruthScene& sc, const KnitMaterial& m, std::mt19937& rng, double max_theta) {
+  std::uniform_real_distribution<double> U(0, 1);
+  ViewSample v;
+  v.x = sc.x0 + (sc.x1 - sc.x0) * U(rng);
+  v.y = sc.y0 + (sc.y1 - sc.y0) * U(rng);
+  const double th = max_theta * U(rng), ph = 6.283 * U(rng);
+  const D3 wi = {std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)};
+  D3 o;
+  sc.entry_ray(v.x, v.y, wi, o, v.d);
+  v.gt = sc.tubes.intersect(o, v.d, 0, sc.shell_exit(o, v.d));
+  v.bh.u = float(v.x);
+  v.bh.v = float(v.y);
+  v.sh = m.shade(v.bh, k::kv3(float(v.d[0]), float(v.d[1]), float(v.d[2])), nullptr);
+  return v;
+}
+
 TEST(Shading, FrontNearFieldMatchesCapmAndExplicitTubes) {
   GroundTruthScene sc(seed(), StitchParams{}, 0, 45);
   KnitMaterialParams mp = flat_params();
   mp.ply_detail = false;
   KnitMaterial m(seed(), mp);
   std::mt19937 rng(2);
-  std::uniform_real_distribution<double> U(0, 1);
   int n = 0, agree = 0, both = 0;
   double normal_err = 0;
   for (int i = 0; i < 600; ++i) {
-    const double x = sc.x0 + (sc.x1 - sc.x0) * U(rng), y = sc.y0 + (sc.y1 - sc.y0) * U(rng);
-    const double th = 1.3 * U(rng), ph = 6.283 * U(rng);
-    const D3 wi = {std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)};
-    D3 o, d;
-    sc.entry_ray(x, y, wi, o, d);
-    const TubeHit gt = sc.tubes.intersect(o, d, 0, sc.shell_exit(o, d));
-    BaseHit bh;
-    bh.u = float(x);
-    bh.v = float(y);
-    const KnitShade sh = m.shade(bh, k::kv3(float(d[0]), float(d[1]), float(d[2])), nullptr);
+    const ViewSample v = view_sample(sc, m, rng, 1.3);
+    const double x = v.x, y = v.y;
+    const TubeHit& gt = v.gt;
+    const KnitShade& sh = v.sh;
     ++n;
     if (sh.pass_through == !gt.hit) ++agree;
     if (gt.hit && !sh.pass_through) {
@@ -250,16 +268,10 @@ TEST(Shading, PathsFromAYarnHitMeetOtherYarnAsExplicitTubesDo) {
     int n = 0, agree = 0, occluded = 0, both = 0;
     double pos_err = 0;
     for (int i = 0; i < 3000 && n < 800; ++i) {
-      const double x = sc.x0 + (sc.x1 - sc.x0) * U(rng), y = sc.y0 + (sc.y1 - sc.y0) * U(rng);
-      const double th = 1.2 * U(rng), ph = 6.283 * U(rng);
-      const D3 wi = {std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)};
-      D3 o, d;
-      sc.entry_ray(x, y, wi, o, d);
-      const TubeHit gt = sc.tubes.intersect(o, d, 0, sc.shell_exit(o, d));
-      BaseHit bh;
-      bh.u = float(x);
-      bh.v = float(y);
-      const KnitShade sh = m.shade(bh, k::kv3(float(d[0]), float(d[1]), float(d[2])), nullptr);
+      const ViewSample v = view_sample(sc, m, rng, 1.2);
+      const TubeHit& gt = v.gt;
+      const BaseHit& bh = v.bh;
+      const KnitShade& sh = v.sh;
       if (!gt.hit || sh.pass_through) continue;
       ASSERT_TRUE(sh.in_shell);
       // The same point on both (else the comparison below is of different paths).

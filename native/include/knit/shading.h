@@ -116,6 +116,8 @@ class KnitMaterial {
   // March from `from`'s yarn point along dir_world (see occluded_from).
   k::KnitCapm march_from(const BaseHit& hit, const KnitShade& from, Vec3 dir_world,
                          const FrameProvider* frame) const;
+  // A shade with the material's unwidened specular lobes and no yarn yet.
+  KnitShade unshaded() const;
   // Near-field shading at yarn hit h of a ray that met the base at `hit`.
   void shade_yarn(const BaseHit& hit, const k::KnitLineHit& h, const FrameProvider* frame, KnitShade& sh) const;
   // Points marched over a footprint spanned by fx, fy (pattern units).
