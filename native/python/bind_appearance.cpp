@@ -322,20 +322,11 @@ Lobe lobe_arg(::py::handle h) {
                          std::string(::py::str(::py::type::handle_of(h).attr("__name__"))));
 }
 
-// Runs body(i) for i in [0, n) with the GIL released; a C++ exception (which
-// validation above should have made impossible) surfaces as ValueError.
+// Rows run through for_each_row (bindings.h): in parallel from
+// kParallelRows rows up.
 template <class F>
 void run_rows(ssize_t n, F&& body) {
-  std::string error;
-  {
-    ::py::gil_scoped_release nogil;
-    try {
-      for (ssize_t i = 0; i < n; ++i) body(i);
-    } catch (const std::exception& e) {
-      error = e.what();
-    }
-  }
-  if (!error.empty()) throw ::py::value_error(error);
+  for_each_row(long(n), [&](long i) { body(ssize_t(i)); });
 }
 
 void put3(::py::array_t<double>& a, ssize_t i, double x, double y, double z) {

@@ -69,21 +69,24 @@ void put(double* row, const Vec3& a) {
 }
 
 // Per-point results of query() and capm() as numpy arrays. A miss has
-// position (x, y, nan), stitch and color -1.
+// position (x, y, nan), stitch and color -1. set() writes through pointers
+// taken at construction (with the GIL), so rows can be set from any thread.
 struct HitArrays {
   explicit HitArrays(ssize_t n)
       : hit(n), pos(vec_array(n)), nor(vec_array(n)), tan(vec_array(n)), layers(n), stitch(n), color(n),
-        row(n), col(n) {}
-  void set(ssize_t i, const SurfaceHit& h, float x, float y) {
-    hit.mutable_data()[i] = h.hit;
-    put(pos.mutable_data(i, 0), h.hit ? h.position : Vec3{x, y, std::nanf("")});
-    put(nor.mutable_data(i, 0), h.normal);
-    put(tan.mutable_data(i, 0), h.tangent);
-    layers.mutable_data()[i] = h.layers;
-    stitch.mutable_data()[i] = h.hit ? h.stitch : -1;
-    color.mutable_data()[i] = h.hit ? h.color : -1;
-    row.mutable_data()[i] = h.row;
-    col.mutable_data()[i] = h.col;
+        row(n), col(n), p_hit(hit.mutable_data()), p_pos(pos.mutable_data()), p_nor(nor.mutable_data()),
+        p_tan(tan.mutable_data()), p_layers(layers.mutable_data()), p_stitch(stitch.mutable_data()),
+        p_color(color.mutable_data()), p_row(row.mutable_data()), p_col(col.mutable_data()) {}
+  void set(ssize_t i, const SurfaceHit& h, float x, float y) const {
+    p_hit[i] = h.hit;
+    put(p_pos + 3 * i, h.hit ? h.position : Vec3{x, y, std::nanf("")});
+    put(p_nor + 3 * i, h.normal);
+    put(p_tan + 3 * i, h.tangent);
+    p_layers[i] = h.layers;
+    p_stitch[i] = h.hit ? h.stitch : -1;
+    p_color[i] = h.hit ? h.color : -1;
+    p_row[i] = h.row;
+    p_col[i] = h.col;
   }
   ::py::dict dict() const {
     ::py::dict d;
@@ -101,6 +104,9 @@ struct HitArrays {
   ::py::array_t<bool> hit;
   ::py::array_t<double> pos, nor, tan;
   ::py::array_t<int> layers, stitch, color, row, col;
+  bool* p_hit;
+  double *p_pos, *p_nor, *p_tan;
+  int *p_layers, *p_stitch, *p_color, *p_row, *p_col;
 };
 
 class PyKnitSurface {
@@ -115,15 +121,13 @@ class PyKnitSurface {
     Points P = points(u, v, uv_scale_);
     HitArrays out(P.n);
     ::py::array_t<double> z(P.n);
-    {
-      ::py::gil_scoped_release nogil;
-      for (ssize_t i = 0; i < P.n; ++i) {
-        const float x = float(uv_scale_ * P.pu[P.su ? 0 : i]), y = float(uv_scale_ * P.pv[P.sv ? 0 : i]);
-        const SurfaceHit h = surf_.query(x, y);
-        out.set(i, h, x, y);
-        z.mutable_data()[i] = h.hit ? h.position.z : std::nan("");
-      }
-    }
+    double* pz = z.mutable_data();
+    for_each_row(P.n, [&](ssize_t i) {
+      const float x = float(uv_scale_ * P.pu[P.su ? 0 : i]), y = float(uv_scale_ * P.pv[P.sv ? 0 : i]);
+      const SurfaceHit h = surf_.query(x, y);
+      out.set(i, h, x, y);
+      pz[i] = h.hit ? h.position.z : std::nan("");
+    });
     ::py::dict d = out.dict();
     d["z"] = z;
     return d;
@@ -183,16 +187,15 @@ class PyKnitSurface {
     const ssize_t n = std::max(P.n, nw);
     HitArrays out(n);
     ::py::array_t<int> steps(n);
-    {
-      ::py::gil_scoped_release nogil;
-      for (ssize_t i = 0; i < n; ++i) {
-        const float x = float(uv_scale_ * P.pu[P.su ? 0 : i]), y = float(uv_scale_ * P.pv[P.sv ? 0 : i]);
-        const double* w = wi.data() + 3 * (nw == 1 ? 0 : i);
-        const SurfaceHit h = surf_.capm(x, y, k::kv3(float(w[0]), float(w[1]), float(w[2])), frame, opt);
-        out.set(i, h, std::nanf(""), std::nanf(""));
-        steps.mutable_data()[i] = h.steps;
-      }
-    }
+    int* ps = steps.mutable_data();
+    const double* pw = wi.data();
+    for_each_row(n, [&](ssize_t i) {
+      const float x = float(uv_scale_ * P.pu[P.su ? 0 : i]), y = float(uv_scale_ * P.pv[P.sv ? 0 : i]);
+      const double* w = pw + 3 * (nw == 1 ? 0 : i);
+      const SurfaceHit h = surf_.capm(x, y, k::kv3(float(w[0]), float(w[1]), float(w[2])), frame, opt);
+      out.set(i, h, std::nanf(""), std::nanf(""));
+      ps[i] = h.steps;
+    });
     ::py::dict d = out.dict();
     d["steps"] = steps;
     return d;
@@ -229,23 +232,26 @@ class PyKnitSurface {
     ::py::array_t<int> pts(n), hits(n);
     ::py::array_t<double> cw({n, ssize_t(KNIT_MS_COLORS)});
     {
-      ::py::gil_scoped_release nogil;
       const KnitSurface& S = surf_;
-      for (ssize_t i = 0; i < n; ++i) {
+      double *o_pd = pd.mutable_data(), *o_layers = layers.mutable_data(), *o_steps = steps.mutable_data();
+      double *o_nor = nor.mutable_data(), *o_tan = tan.mutable_data(), *o_sig = sig.mutable_data();
+      double* o_cw = cw.mutable_data();
+      int *o_pts = pts.mutable_data(), *o_hits = hits.mutable_data();
+      for_each_row(n, [&](ssize_t i) {
         const float x = sc * float(P.pu[P.su ? 0 : i]), y = sc * float(P.pv[P.sv ? 0 : i]);
         const k::KnitAggregate a = k::knit_aggregate(
             S.geom(), S.codes(), S.colors(), x, y, k::kv3_scale(ex, sc), k::kv3_scale(ey, sc), wl, n_points,
             float(shift_x), float(shift_y), float(kx), float(ky), float(max_segment), max_steps);
-        pd.mutable_data()[i] = a.p_delta;
-        layers.mutable_data()[i] = a.layers;
-        steps.mutable_data()[i] = a.steps;
-        pts.mutable_data()[i] = a.points;
-        hits.mutable_data()[i] = a.hits;
-        put(nor.mutable_data(i, 0), a.n);
-        put(tan.mutable_data(i, 0), a.tangent);
-        put(sig.mutable_data(i, 0), k::kv3(a.sxx, a.sxy, a.syy));
-        for (int c = 0; c < KNIT_MS_COLORS; ++c) cw.mutable_data(i, c)[0] = a.color_w[c];
-      }
+        o_pd[i] = a.p_delta;
+        o_layers[i] = a.layers;
+        o_steps[i] = a.steps;
+        o_pts[i] = a.points;
+        o_hits[i] = a.hits;
+        put(o_nor + 3 * i, a.n);
+        put(o_tan + 3 * i, a.tangent);
+        put(o_sig + 3 * i, k::kv3(a.sxx, a.sxy, a.syy));
+        for (int c = 0; c < KNIT_MS_COLORS; ++c) o_cw[KNIT_MS_COLORS * i + c] = a.color_w[c];
+      });
     }
     ::py::dict d;
     d["p_delta"] = pd;

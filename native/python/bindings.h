@@ -1,8 +1,12 @@
 // One function per area of the Python module, each in bind_<area>.cpp.
 #pragma once
 #include <pybind11/pybind11.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <cstdio>
+#include <exception>
+#include <mutex>
 #include <string>
 
 namespace knit::py {
@@ -12,6 +16,36 @@ inline std::string num(double v) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.6g", v);
   return buf;
+}
+
+// Runs body(i) for every i in [0, n) with the GIL released: on every core
+// (TBB) from kParallelRows rows up, in the calling thread below that. Each
+// body writes only row i of its outputs through raw pointers taken with the
+// GIL held. A C++ exception (which the validation at the boundary should
+// have made impossible) surfaces as ValueError once all rows are done.
+constexpr long kParallelRows = 1024;
+template <class F>
+void for_each_row(long n, F&& body) {
+  std::string error;
+  std::mutex error_mutex;
+  auto rows = [&](long begin, long end) {
+    try {
+      for (long i = begin; i < end; ++i) body(i);
+    } catch (const std::exception& e) {
+      const std::lock_guard<std::mutex> lock(error_mutex);
+      if (error.empty()) error = e.what();
+    }
+  };
+  {
+    pybind11::gil_scoped_release nogil;
+    if (n < kParallelRows) {
+      rows(0, n);
+    } else {
+      tbb::parallel_for(tbb::blocked_range<long>(0, n, 256),
+                        [&](const tbb::blocked_range<long>& r) { rows(r.begin(), r.end()); });
+    }
+  }
+  if (!error.empty()) throw pybind11::value_error(error);
 }
 
 void bind_pattern(pybind11::module_& m);     // bind_pattern.cpp

@@ -199,6 +199,47 @@ class CapmTest(unittest.TestCase):
             knitshade.CylinderFrame(-1.0)
 
 
+class ParallelBatchTest(unittest.TestCase):
+    """Batches of 1024 points or more run on every core (TBB): each row must
+    come out exactly as when the point is asked alone, in the calling
+    thread."""
+
+    def setUp(self):
+        self.surf = knitshade.KnitSurface(seed_pattern(), knitshade.StitchParams())
+        rng = np.random.default_rng(21)
+        self.n = 3000
+        self.u = rng.uniform(0, 60, self.n)
+        self.v = rng.uniform(0, 60, self.n)
+        th = rng.uniform(0, 1.4, self.n)
+        ph = rng.uniform(0, 2 * math.pi, self.n)
+        self.wi = np.stack([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)], axis=1)
+        self.rows = list(range(0, self.n, 97))
+
+    def assert_rows_equal(self, batch, single, i):
+        for key, value in single.items():
+            np.testing.assert_array_equal(batch[key][i], value[0], err_msg=f"{key}[{i}]")
+
+    def test_query(self):
+        q = self.surf.query(self.u, self.v)
+        self.assertTrue(q["hit"].any() and (~q["hit"]).any())
+        for i in self.rows:
+            self.assert_rows_equal(q, self.surf.query(self.u[i:i + 1], self.v[i:i + 1]), i)
+
+    def test_capm_on_a_cylinder(self):
+        frame = knitshade.CylinderFrame(40.0)
+        c = self.surf.capm(self.u, self.v, self.wi, frame=frame)
+        self.assertTrue(c["hit"].any() and (~c["hit"]).any())
+        for i in self.rows:
+            self.assert_rows_equal(c, self.surf.capm(self.u[i:i + 1], self.v[i:i + 1], self.wi[i], frame=frame), i)
+
+    def test_aggregate(self):
+        args = ([3.0, 0.5], [0.4, 2.5], [0.3, 0.2, 0.93], 8, 0.3, 0.7)
+        a = self.surf.aggregate(self.u, self.v, *args)
+        self.assertTrue((a["hits"] > 0).any())
+        for i in self.rows:
+            self.assert_rows_equal(a, self.surf.aggregate(self.u[i:i + 1], self.v[i:i + 1], *args), i)
+
+
 class ExplicitYarnsTest(unittest.TestCase):
     def test_shapes_and_extent(self):
         p = knitshade.Pattern.from_rows([[0, 1, 0], [1, 1, 0]])
