@@ -531,9 +531,11 @@ TEST(KnitVsExplicit, HalfCylinderFarViewMultiScale) {
       ASSERT_NE(m.knit.model->footprint_table(), nullptr);
     }
   });
-  EXPECT_LT(std::fabs(c.pixels.rel_bias), 0.2);
+  // Measured +3.0%, 0.224, 0.190 (at 64 spp the MAE and the block error are
+  // mostly the two images' noise: noise RMSE 0.033 of RMSE 0.037).
+  EXPECT_LT(std::fabs(c.pixels.rel_bias), 0.06);
   EXPECT_LT(c.pixels.rel_mae, 0.3);
-  EXPECT_LT(c.blocks.rel_rmse, 0.3);
+  EXPECT_LT(c.blocks.rel_rmse, 0.25);
 }
 
 TEST(KnitVsExplicit, HalfCylinderCloseUp) {
@@ -545,9 +547,10 @@ TEST(KnitVsExplicit, HalfCylinderCloseUp) {
 
 TEST(KnitVsExplicit, SwatchFarViewMultiScale) {
   const Comparison c = compare_model_and_explicit("swatch_far.json", 48, 64);
-  EXPECT_LT(std::fabs(c.pixels.rel_bias), 0.2);
-  EXPECT_LT(c.pixels.rel_mae, 0.3);
-  EXPECT_LT(c.blocks.rel_rmse, 0.3);
+  // Measured -2.4%, 0.069, 0.042.
+  EXPECT_LT(std::fabs(c.pixels.rel_bias), 0.06);
+  EXPECT_LT(c.pixels.rel_mae, 0.12);
+  EXPECT_LT(c.blocks.rel_rmse, 0.08);
 }
 
 TEST(KnitVsExplicit, SwatchCloseUp) {
