@@ -243,36 +243,45 @@ void FootprintTable::for_each_cell(const KnitSurface& surface, const k::KFootpri
 k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
   const k::KnitGeom& g = surface.geom();
   k::KnitAggregate a{};
-  // The direction is the same for every cell: one lookup per class present.
+  // The direction is the same for every cell: per class present, its hit
+  // fraction (and, with several colours, its neighbour shares) on first
+  // use, and its full statistics once at the end for the mix. (Holding a
+  // Stats per class, value-initialised, took half of this function's time
+  // in memset.)
   const DirWeights dw = dir_weights(wi);
-  std::array<Stats, kClasses> cls_stats;
-  std::array<bool, kClasses> looked_up{};
+  std::array<float, kClasses> cls_hit;
+  cls_hit.fill(-1);
   std::array<double, kClasses> cls_hits{};
+  std::array<std::array<float, 9>, kClasses> cls_near;  // row cls valid once near_ready[cls]
+  std::array<bool, kClasses> near_ready{};
   double cells = 0, hits = 0;
   struct Pick {
     int colour;
     float cum;
   };
-  std::array<Pick, KNIT_MS_MAX_POINTS> picks{};
+  std::array<Pick, KNIT_MS_MAX_POINTS> picks;  // the first npicks are set
   int npicks = 0;
   for_each_cell(surface, f, [&](int cls, int k, int c) {
-    if (!looked_up[size_t(cls)]) {
-      cls_stats[size_t(cls)] = lookup(cls, dw);
-      looked_up[size_t(cls)] = true;
-    }
-    const Stats& s = cls_stats[size_t(cls)];
+    float& h = cls_hit[size_t(cls)];
+    if (h < 0) h = hit_fraction(cls, dw);
     cells += 1;
-    if (s.hit <= 0) return;
-    const float w = s.hit;
+    if (h <= 0) return;
+    const float w = h;
     hits += w;
     cls_hits[size_t(cls)] += w;
     if (one_colour_) return;
+    if (!near_ready[size_t(cls)]) {
+      const Stats s = lookup(cls, dw);
+      std::copy(std::begin(s.near), std::end(s.near), cls_near[size_t(cls)].begin());
+      near_ready[size_t(cls)] = true;
+    }
+    const std::array<float, 9>& near = cls_near[size_t(cls)];
     // Colours of the yarns hit: the 3 x 3 block around the cell, by share.
     int colour = -1;
     float share = -1;
     for (int dk = -1; dk <= 1; ++dk)
       for (int dc = -1; dc <= 1; ++dc) {
-        const float q = s.near[(dk + 1) * 3 + dc + 1];
+        const float q = near[size_t((dk + 1) * 3 + dc + 1)];
         if (q <= 0) continue;
         const int col = surface.colors()[k::knit_cell_index(g, k + dk, c + dc)];
         a.color_w[std::clamp(col, 0, KNIT_MS_COLORS - 1)] += w * q;
@@ -297,7 +306,8 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
   // The hit-weighted means over the cells (by class: the same sums); the
   // covariance about the mean slope.
   StatsMix<Stats> mix;
-  for (int cls = 0; cls < kClasses; ++cls) mix.add(cls_stats[size_t(cls)], float(cls_hits[size_t(cls)]));
+  for (int cls = 0; cls < kClasses; ++cls)
+    if (cls_hits[size_t(cls)] > 0) mix.add(lookup(cls, dw), float(cls_hits[size_t(cls)]));
   const Stats m = mix.result(float(hits / cells));
   const double inv = 1 / hits;
   a.n = k::kv3_normalize(k::kv3(m.nx, m.ny, m.nz));
@@ -323,6 +333,15 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
   return a;
 }
 
+float FootprintTable::hit_fraction(int cls, const DirWeights& d) const {
+  const int slot = slot_[size_t(cls)];
+  if (slot < 0) return 0;  // not in the pattern (cannot happen for its own cells)
+  float h = 0;
+  for (int q = 0; q < 4; ++q)
+    h += d.w[size_t(q)] * stats_[size_t(slot) * kThetaBins * kPhiBins + size_t(d.node[size_t(q)])].hit;
+  return h;
+}
+
 float FootprintTable::p_delta(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
   const DirWeights dw = dir_weights(wi);
   // Only hit fractions: bilinear in direction, per class.
@@ -331,13 +350,7 @@ float FootprintTable::p_delta(const KnitSurface& surface, const k::KFootprint& f
   double cells = 0, hits = 0;
   for_each_cell(surface, f, [&](int cls, int, int) {
     float& h = hit[size_t(cls)];
-    if (h < 0) {
-      h = 0;
-      const int slot = slot_[size_t(cls)];
-      if (slot >= 0)
-        for (int q = 0; q < 4; ++q)
-          h += dw.w[size_t(q)] * stats_[size_t(slot) * kThetaBins * kPhiBins + size_t(dw.node[size_t(q)])].hit;
-    }
+    if (h < 0) h = hit_fraction(cls, dw);
     cells += 1;
     hits += h;
   });

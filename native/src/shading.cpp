@@ -258,8 +258,9 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     Vec3 tg = k::kv3_sub(a.tangent, k::kv3_scale(n, k::kv3_dot(a.tangent, n)));
     if (k::kv3_len(tg) < 1e-4f) tg = k::kv3_cross(k::kv3(0, 1, 0), n);
     tg = k::kv3_normalize(tg);
-    const float th = std::atan2(tg.y, tg.x);
-    const float c = std::cos(th), s = std::sin(th);
+    // cos and sin of the tangent's azimuth atan2(tg.y, tg.x), without the trig.
+    const float txy = std::sqrt(tg.x * tg.x + tg.y * tg.y);
+    const float c = txy > 0 ? tg.x / txy : 1.0f, s = txy > 0 ? tg.y / txy : 0.0f;
     const float sxx = c * c * a.sxx + 2 * c * s * a.sxy + s * s * a.syy;
     const float syy = s * s * a.sxx - 2 * c * s * a.sxy + c * c * a.syy;
     const float sxy = (c * c - s * s) * a.sxy + c * s * (a.syy - a.sxx);

@@ -78,6 +78,7 @@ class FootprintTable {
   };
   static DirWeights dir_weights(Vec3 wi_local);
   Stats lookup(int cls, const DirWeights& d) const;
+  float hit_fraction(int cls, const DirWeights& d) const;  // lookup(cls, d).hit alone
   // Visits (class, row, column) of the cells of f.
   template <class Visit>
   void for_each_cell(const KnitSurface& surface, const k::KFootprint& f, Visit&& visit) const;
