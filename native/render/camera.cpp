@@ -27,9 +27,10 @@ RayDifferential PinholeCamera::generate(float raster_x, float raster_y, float di
   r.diff_scale = diff_scale;
   r.rx_o = pos_;
   r.ry_o = pos_;
-  r.rx_d = r.d + (direction(raster_x + 1.0f, raster_y) - r.d) * diff_scale;
+  const Vec3 dx = direction(raster_x + 1.0f, raster_y) - r.d;
+  r.rx_d = r.d + dx * diff_scale;
   r.ry_d = r.d + (direction(raster_x, raster_y + 1.0f) - r.d) * diff_scale;
-  r.cone_spread = length(direction(raster_x + 1.0f, raster_y) - r.d);  // one pixel's angle
+  r.cone_spread = length(dx);  // one pixel's angle
   return r;
 }
 

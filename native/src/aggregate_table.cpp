@@ -115,6 +115,8 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
   one_colour_ = std::all_of(surface.colors(), surface.colors() + class_of_.size(), [](int c) { return c == 0; });
   int slots = 0;
   for (int i = 0; i < kClasses; ++i) slot_[size_t(i)] = cells[size_t(i)].empty() ? -1 : slots++;
+  if (slots == 1)
+    single_class_ = int(std::find_if(slot_.begin(), slot_.end(), [](int s) { return s >= 0; }) - slot_.begin());
   stats_.assign(size_t(slots) * kThetaBins * kPhiBins, Stats{});
   const int m_rays = std::max(1, rays_per_direction);
   tbb::parallel_for(0, kClasses * kThetaBins, [&](int job) {
@@ -229,9 +231,19 @@ template <class Visit>
 void FootprintTable::for_each_cell(const KnitSurface& surface, const k::KFootprint& f, Visit&& visit) const {
   const k::KnitGeom& g = surface.geom();
   auto cell = [&](int k, int c) { visit(int(class_of_[size_t(k::knit_cell_index(g, k, c))]), k, c); };
-  if (int64_t(f.ncx) * int64_t(f.ncy) <= KNIT_MS_MAX_POINTS) {  // up to 1e5 x 1e5 cells: no int product
-    for (int cy = 0; cy < f.ncy; ++cy)
-      for (int cx = 0; cx < f.ncx; ++cx) cell(f.by0 + cy, f.bx0 + cx);
+  if (all_cells(f)) {
+    // Row by row, the column index wrapped by hand: two modulos per row
+    // instead of two integer divisions per cell (knit_cell_index).
+    const int c0 = k::k_modi(f.bx0, g.cols);
+    for (int cy = 0; cy < f.ncy; ++cy) {
+      const int k = f.by0 + cy;
+      const size_t row = size_t(g.rows - 1 - k::k_modi(k, g.rows)) * size_t(g.cols);
+      int cm = c0;
+      for (int cx = 0; cx < f.ncx; ++cx) {
+        visit(int(class_of_[row + size_t(cm)]), k, f.bx0 + cx);
+        if (++cm == g.cols) cm = 0;
+      }
+    }
     return;
   }
   for (int i = 0; i < f.n; ++i) {
@@ -261,7 +273,12 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
   };
   std::array<Pick, KNIT_MS_MAX_POINTS> picks;  // the first npicks are set
   int npicks = 0;
-  for_each_cell(surface, f, [&](int cls, int k, int c) {
+  if (single_class_ >= 0 && one_colour_) {
+    // One class, one colour: every cell the same, nothing to visit.
+    const float h = hit_fraction(single_class_, dw);
+    cells = cell_count(f);
+    if (h > 0) hits = cls_hits[size_t(single_class_)] = cells * double(h);
+  } else for_each_cell(surface, f, [&](int cls, int k, int c) {
     float& h = cls_hit[size_t(cls)];
     if (h < 0) h = hit_fraction(cls, dw);
     cells += 1;
@@ -344,6 +361,7 @@ float FootprintTable::hit_fraction(int cls, const DirWeights& d) const {
 
 float FootprintTable::p_delta(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
   const DirWeights dw = dir_weights(wi);
+  if (single_class_ >= 0) return cell_count(f) > 0 ? 1 - hit_fraction(single_class_, dw) : 1.0f;
   // Only hit fractions: bilinear in direction, per class.
   std::array<float, kClasses> hit;
   hit.fill(-1);

@@ -30,6 +30,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "knit/surface.h"
@@ -82,11 +83,18 @@ class FootprintTable {
   // Visits (class, row, column) of the cells of f.
   template <class Visit>
   void for_each_cell(const KnitSurface& surface, const k::KFootprint& f, Visit&& visit) const;
+  // Whether for_each_cell visits every cell of f's box (at most
+  // KNIT_MS_MAX_POINTS of them), else the cells of f's points; how many.
+  static bool all_cells(const k::KFootprint& f) {
+    return int64_t(f.ncx) * int64_t(f.ncy) <= KNIT_MS_MAX_POINTS;  // up to 1e5 x 1e5 cells: no int product
+  }
+  static double cell_count(const k::KFootprint& f) { return all_cells(f) ? double(f.ncx) * f.ncy : double(f.n); }
 
   std::array<int, kClasses> slot_{};  // index into stats_ blocks, -1 when the class is absent
   std::vector<Stats> stats_;          // [slot][theta][phi]
   std::vector<unsigned char> class_of_;  // class of each pattern cell, by knit_cell_index
   bool one_colour_ = true;               // every cell has colour index 0
+  int single_class_ = -1;                // the class of every cell, when the pattern has one
 };
 
 }  // namespace knit
