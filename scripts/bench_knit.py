@@ -9,12 +9,15 @@ summary) to OUT_DIR.
                   multi-scale and near-field model) each render a
                   high-sample reference of their own, then a ladder of sample
                   counts; the time each needs to reach the same RMSE against
-                  its own reference is interpolated (log-log) on the ladder.
+                  its own reference is interpolated (log-log) on the ladder,
+                  and, less noisy, the samples it needs (interpolated the
+                  same way; seeded errors are deterministic) times the cost
+                  of a sample pass timed on its reference render.
   memory          the model's state (KnitMaterial::state_bytes) and the
                   renderer's per-mesh tables, against the explicit yarns'
                   geometry, shading data and Embree BVH.
   overhead        the knit model against a plain diffuse material of the same
-                  colour on the same mesh and lights, same samples.
+                  colour on the same mesh and lights, same samples (64).
 
   /usr/bin/python3 scripts/bench_knit.py BUILD_DIR OUT_DIR [--quick] [--paper-far-view] [--only PARTS]
 
@@ -142,6 +145,19 @@ class Bench:
         p = pts[0] if target > pts[0]["rmse_corrected"] else pts[-1]
         return p["seconds"] * (p["rmse_corrected"] / target) ** 2
 
+    @staticmethod
+    def samples_to_error(conv, target):
+        """Samples per pixel to reach RMSE `target`, interpolated log-log on the ladder (the errors of a
+        seeded render are deterministic; only the times are noisy)."""
+        pts = conv["points"]
+        for a, b in zip(pts, pts[1:]):
+            ea, eb = a["rmse_corrected"], b["rmse_corrected"]
+            if ea >= target >= eb and ea > eb:
+                f = (math.log(ea) - math.log(target)) / (math.log(ea) - math.log(eb))
+                return math.exp(math.log(a["spp"]) + f * (math.log(b["spp"]) - math.log(a["spp"])))
+        p = pts[0] if target > pts[0]["rmse_corrected"] else pts[-1]
+        return p["spp"] * (p["rmse_corrected"] / target) ** 2
+
     def equal_quality(self, name, scene_a, scene_b, label_a, label_b, ladder, ref_spp, explicit_b=False,
                       tag_a=None, tag_b=None, mask=None):
         print(f"equal quality: {name}", flush=True)
@@ -158,6 +174,15 @@ class Bench:
                label_b: {"seconds": tb, "ladder": b["points"], "reference_spp": ref_spp,
                          "reference_seconds": b["reference_seconds"]},
                "speedup": tb / ta}
+        # The same from the samples each needs and the cost of a sample pass timed on its reference
+        # (ref_spp samples, seconds long): the ladder's renders at the target take a tenth of a second,
+        # where the timer's noise is 10-30%.
+        for label, conv in ((label_a, a), (label_b, b)):
+            spp = self.samples_to_error(conv, target)
+            per_pass = conv["reference_seconds"] / ref_spp
+            res[label].update({"samples_to_target": spp, "seconds_per_pass": per_pass,
+                               "seconds_by_passes": spp * per_pass})
+        res["speedup_by_passes"] = res[label_b]["seconds_by_passes"] / res[label_a]["seconds_by_passes"]
         ma, mb = a["report"]["memory_bytes"], b["report"]["memory_bytes"]
         res["memory"] = {label_a: ma, label_b: mb}
         res["knit"] = {label_a: a["report"]["knit"], label_b: b["report"]["knit"]}
@@ -166,7 +191,11 @@ class Bench:
         if mask:
             res["mask"] = mask
         print(f"  -> target RMSE {target:.5f}: {label_a} {ta:.2f} s, {label_b} {tb:.2f} s, "
-              f"{label_b}/{label_a} = {tb / ta:.2f}", flush=True)
+              f"{label_b}/{label_a} = {tb / ta:.2f}; by passes: {label_a} "
+              f"{res[label_a]['samples_to_target']:.1f} spp x {1e3 * res[label_a]['seconds_per_pass']:.2f} ms, "
+              f"{label_b} {res[label_b]['samples_to_target']:.1f} spp x "
+              f"{1e3 * res[label_b]['seconds_per_pass']:.2f} ms, {label_b}/{label_a} = "
+              f"{res['speedup_by_passes']:.2f}", flush=True)
         return res
 
     def overhead(self, name, scene, spp):
@@ -294,14 +323,16 @@ def main():
 
     # 4. Overhead of the knit material against diffuse, same mesh, lights and samples.
     if "overhead" in parts:
+        # 64 spp: the diffuse renders then take about a second, not a tenth.
+        oh = 16 if quick else 64
         b.results["overhead"] = {
-            "half_cylinder": b.overhead("oh_half_cylinder", hc, 16),
-            "swatch_closeup": b.overhead("oh_swatch", sized(load("swatch_closeup.json"), size, size), 16),
-            "scarf": b.overhead("oh_scarf", sized(load("scarf.json"), size, int(size * 1.2)), 16),
-            "half_cylinder_multi_scale": b.overhead("oh_half_cylinder_ms", multi_scale(hc), 16),
-            "swatch_far_multi_scale": b.overhead("oh_swatch_far", far, 16),
+            "half_cylinder": b.overhead("oh_half_cylinder", hc, oh),
+            "swatch_closeup": b.overhead("oh_swatch", sized(load("swatch_closeup.json"), size, size), oh),
+            "scarf": b.overhead("oh_scarf", sized(load("scarf.json"), size, int(size * 1.2)), oh),
+            "half_cylinder_multi_scale": b.overhead("oh_half_cylinder_ms", multi_scale(hc), oh),
+            "swatch_far_multi_scale": b.overhead("oh_swatch_far", far, oh),
             "scarf_multi_scale": b.overhead("oh_scarf_ms", multi_scale(sized(load("scarf.json"), size, int(size * 1.2))),
-                                            16),
+                                            oh),
         }
     b.results["finished"] = time.ctime()
     with open(os.path.join(b.out, "bench_knit.json"), "w") as f:
