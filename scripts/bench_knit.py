@@ -133,30 +133,18 @@ class Bench:
         return self._conv[key]
 
     @staticmethod
-    def time_to_error(conv, target):
-        """Render seconds to reach RMSE `target`, interpolated log-log on the ladder."""
+    def to_error(conv, target, key):
+        """`key` ("seconds" of render time, or "spp") needed to reach RMSE `target`, interpolated
+        log-log on the ladder; outside it, extrapolated with error ~ 1 / sqrt(key) from the nearest
+        end. (The errors of a seeded render are deterministic; only the times are noisy.)"""
         pts = conv["points"]
         for a, b in zip(pts, pts[1:]):
             ea, eb = a["rmse_corrected"], b["rmse_corrected"]
             if ea >= target >= eb and ea > eb:
                 f = (math.log(ea) - math.log(target)) / (math.log(ea) - math.log(eb))
-                return math.exp(math.log(a["seconds"]) + f * (math.log(b["seconds"]) - math.log(a["seconds"])))
-        # Outside the ladder: extrapolate with error ~ 1 / sqrt(time) from the nearest end.
+                return math.exp(math.log(a[key]) + f * (math.log(b[key]) - math.log(a[key])))
         p = pts[0] if target > pts[0]["rmse_corrected"] else pts[-1]
-        return p["seconds"] * (p["rmse_corrected"] / target) ** 2
-
-    @staticmethod
-    def samples_to_error(conv, target):
-        """Samples per pixel to reach RMSE `target`, interpolated log-log on the ladder (the errors of a
-        seeded render are deterministic; only the times are noisy)."""
-        pts = conv["points"]
-        for a, b in zip(pts, pts[1:]):
-            ea, eb = a["rmse_corrected"], b["rmse_corrected"]
-            if ea >= target >= eb and ea > eb:
-                f = (math.log(ea) - math.log(target)) / (math.log(ea) - math.log(eb))
-                return math.exp(math.log(a["spp"]) + f * (math.log(b["spp"]) - math.log(a["spp"])))
-        p = pts[0] if target > pts[0]["rmse_corrected"] else pts[-1]
-        return p["spp"] * (p["rmse_corrected"] / target) ** 2
+        return p[key] * (p["rmse_corrected"] / target) ** 2
 
     def equal_quality(self, name, scene_a, scene_b, label_a, label_b, ladder, ref_spp, explicit_b=False,
                       tag_a=None, tag_b=None, mask=None):
@@ -166,7 +154,7 @@ class Bench:
         # Target: the error method A reaches at the middle of the ladder, if B reaches it too.
         mid = a["points"][len(ladder) // 2]["rmse_corrected"]
         target = max(mid, b["points"][-1]["rmse_corrected"])
-        ta, tb = self.time_to_error(a, target), self.time_to_error(b, target)
+        ta, tb = self.to_error(a, target, "seconds"), self.to_error(b, target, "seconds")
         mean = a["points"][-1]["mean"]
         res = {"target_rmse": target, "target_relative": target / mean if mean else None,
                label_a: {"seconds": ta, "ladder": a["points"], "reference_spp": ref_spp,
@@ -178,7 +166,7 @@ class Bench:
         # (ref_spp samples, seconds long): the ladder's renders at the target take a tenth of a second,
         # where the timer's noise is 10-30%.
         for label, conv in ((label_a, a), (label_b, b)):
-            spp = self.samples_to_error(conv, target)
+            spp = self.to_error(conv, target, "spp")
             per_pass = conv["reference_seconds"] / ref_spp
             res[label].update({"samples_to_target": spp, "seconds_per_pass": per_pass,
                                "seconds_by_passes": spp * per_pass})
