@@ -113,6 +113,80 @@ TEST(FootprintTable, MatchesExplicitTubesOverFootprint) {
   std::printf("[ table ] worst |p_delta - explicit| %.4f, worst mean-normal angle %.2f deg\n", worst_pd, worst_n);
 }
 
+// The cells of a footprint are visited row by row with the column wrapped
+// by hand: the same footprint moved by whole pattern repeats, to negative
+// coordinates too, must give the same aggregate. And a pattern of one class
+// and one colour skips the visit: stockinette must aggregate as when a
+// second colour index (no effect on geometry) forces the visit.
+TEST(FootprintTable, CellVisitsWrapAndOneClassNeedsNone) {
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<float> U(0, 1);
+  {
+    KnitSurface s(pyramid16(), StitchParams{});
+    const FootprintTable table(s, CapmOptions{});
+    ASSERT_GT(table.classes_present(), 1);
+    const float cw = 6.2831853f, ch = s.geom().row_spacing;
+    for (int rep = 0; rep < 40; ++rep) {
+      // Sizes of n + 1/2 cells and centres placed so that the first cell
+      // covered is (cy, cx) with half a cell to spare (knit_footprint's
+      // floor), so that the moved copies cover the same cells despite float
+      // rounding.
+      const int cx = int(16 * U(rng)), cy = int(16 * U(rng));
+      const int nx = 2 + int(6 * U(rng)), ny = 2 + int(6 * U(rng));
+      const float w = cw * (float(nx) + 0.5f), h = ch * (float(ny) + 0.5f);
+      const float th = 1.3f * U(rng), ph = 6.2831853f * U(rng);
+      const k::kvec3 wi = k::kv3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
+      auto at = [&](int mx, int my) {
+        const float x = (float(cx + 16 * mx) + 0.5f + 0.5f * float(nx)) * cw;
+        const float y = (float(cy + 16 * my) + 0.5f + 0.5f * float(ny)) * ch;
+        return k::knit_footprint(s.geom(), x, y, k::kv3(w, 0, 0), k::kv3(0, h, 0), 4, 0.5f, 0.5f);
+      };
+      const k::KFootprint f0 = at(0, 0);
+      ASSERT_EQ(f0.stratified, 1);
+      ASSERT_EQ(f0.ncx, nx);
+      ASSERT_EQ(f0.bx0, cx);
+      ASSERT_EQ(f0.by0, cy);
+      const k::KnitAggregate a0 = table.aggregate(s, f0, wi);
+      for (const auto& m : {std::pair<int, int>{-3, 0}, {0, -2}, {-5, -7}, {4, 3}}) {
+        const k::KFootprint f = at(m.first, m.second);
+        ASSERT_EQ(f.ncx, f0.ncx);
+        ASSERT_EQ(f.ncy, f0.ncy);
+        ASSERT_EQ(f.bx0, cx + 16 * m.first);
+        ASSERT_EQ(f.by0, cy + 16 * m.second);
+        const k::KnitAggregate a = table.aggregate(s, f, wi);
+        EXPECT_FLOAT_EQ(a.p_delta, a0.p_delta) << rep << " moved " << m.first << ", " << m.second;
+        EXPECT_FLOAT_EQ(a.n.x, a0.n.x) << rep;
+        EXPECT_FLOAT_EQ(a.n.z, a0.n.z) << rep;
+        EXPECT_FLOAT_EQ(a.layers, a0.layers) << rep;
+        EXPECT_FLOAT_EQ(table.p_delta(s, f, wi), a0.p_delta) << rep;
+      }
+    }
+  }
+  {
+    // The same cells for both tables (so the same rays build them); only
+    // the colour indices differ.
+    KnitSurface plain(Pattern::from_rows({{0, 0}, {0, 0}}), StitchParams{});
+    KnitSurface coloured(Pattern::from_rows({{0, 0}, {0, 0}}, {{0, 1}, {0, 0}}), StitchParams{});
+    const FootprintTable tp(plain, CapmOptions{}), tc(coloured, CapmOptions{});
+    ASSERT_EQ(tp.classes_present(), 1);
+    for (int rep = 0; rep < 20; ++rep) {
+      const float size = 6.2831853f * (1.5f + 8 * U(rng));
+      const float x = 200 * U(rng) - 100, y = 200 * U(rng) - 100;
+      const float th = 1.3f * U(rng), ph = 6.2831853f * U(rng);
+      const k::kvec3 wi = k::kv3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
+      const k::KFootprint fp = k::knit_footprint(plain.geom(), x, y, k::kv3(size, 0, 0), k::kv3(0, size, 0), 4, 0.5f, 0.5f);
+      const k::KFootprint fc = k::knit_footprint(coloured.geom(), x, y, k::kv3(size, 0, 0), k::kv3(0, size, 0), 4, 0.5f, 0.5f);
+      const k::KnitAggregate ap = tp.aggregate(plain, fp, wi), ac = tc.aggregate(coloured, fc, wi);
+      EXPECT_EQ(ap.points, ac.points) << rep;
+      EXPECT_NEAR(ap.p_delta, ac.p_delta, 1e-6) << rep;
+      EXPECT_NEAR(ap.n.z, ac.n.z, 1e-6) << rep;
+      EXPECT_NEAR(ap.layers, ac.layers, 1e-5) << rep;
+      EXPECT_NEAR(ap.sxx, ac.sxx, 1e-5) << rep;
+      EXPECT_NEAR(tp.p_delta(plain, fp, wi), ap.p_delta, 1e-6) << rep;
+    }
+  }
+}
+
 // Colours: on the two-colour diamond blocks, the table's histogram over a
 // footprint against the marched aggregate's (64 points, many shifts), and
 // its mean layer count.
