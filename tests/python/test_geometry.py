@@ -232,6 +232,17 @@ class ParallelBatchTest(unittest.TestCase):
         for i in self.rows:
             self.assert_rows_equal(c, self.surf.capm(self.u[i:i + 1], self.v[i:i + 1], self.wi[i], frame=frame), i)
 
+    def test_material_shade(self):
+        # The appearance functions share the same row loop.
+        m = knitshade.KnitMaterial(seed_pattern(), knitshade.StitchParams(), uv_scale=1.0)
+        d = -self.wi
+        sh = m.shade(self.u, self.v, d)
+        self.assertTrue(sh["pass_through"].any() and (~sh["pass_through"]).any())
+        for i in self.rows:
+            single = m.shade(self.u[i:i + 1], self.v[i:i + 1], d[i:i + 1])
+            for key, value in single.items():
+                np.testing.assert_array_equal(sh[key][i], value[0], err_msg=f"{key}[{i}]")
+
     def test_aggregate(self):
         args = ([3.0, 0.5], [0.4, 2.5], [0.3, 0.2, 0.93], 8, 0.3, 0.7)
         a = self.surf.aggregate(self.u, self.v, *args)
