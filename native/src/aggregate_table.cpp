@@ -117,6 +117,18 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
   for (int i = 0; i < kClasses; ++i) slot_[size_t(i)] = cells[size_t(i)].empty() ? -1 : slots++;
   if (slots == 1)
     single_class_ = int(std::find_if(slot_.begin(), slot_.end(), [](int s) { return s >= 0; }) - slot_.begin());
+  for (int i = 0; i < kClasses; ++i)
+    if (slot_[size_t(i)] >= 0) class_of_slot_[size_t(slot_[size_t(i)])] = i;
+  const size_t cols1 = size_t(g.cols) + 1;
+  if (slots > 1 && size_t(g.rows) * size_t(slots) * cols1 <= kMaxPrefix) {
+    prefix_.assign(size_t(g.rows) * size_t(slots) * cols1, 0);
+    for (size_t pr = 0; pr < size_t(g.rows); ++pr)
+      for (size_t s = 0; s < size_t(slots); ++s) {
+        uint16_t* p = &prefix_[(pr * size_t(slots) + s) * cols1];
+        for (size_t c = 0; c < size_t(g.cols); ++c)
+          p[c + 1] = uint16_t(p[c] + (slot_[class_of_[pr * size_t(g.cols) + c]] == int(s) ? 1 : 0));
+      }
+  }
   stats_.assign(size_t(slots) * kThetaBins * kPhiBins, Stats{});
   const int m_rays = std::max(1, rays_per_direction);
   tbb::parallel_for(0, kClasses * kThetaBins, [&](int job) {
@@ -252,6 +264,34 @@ void FootprintTable::for_each_cell(const KnitSurface& surface, const k::KFootpri
   }
 }
 
+bool FootprintTable::class_counts(const KnitSurface& surface, const k::KFootprint& f,
+                                  std::array<double, kClasses>& counts) const {
+  if (prefix_.empty() || !all_cells(f)) return false;
+  const k::KnitGeom& g = surface.geom();
+  const int slots = classes_present();
+  const size_t cols1 = size_t(g.cols) + 1;
+  // Columns [c0, c0 + ncx) of a row, wrapped: `full` whole rows and a rest.
+  const int c0 = k::k_modi(f.bx0, g.cols);
+  const int full = f.ncx / g.cols, rest = f.ncx % g.cols;
+  std::array<int, kClasses> n{};  // by slot
+  for (int cy = 0; cy < f.ncy; ++cy) {
+    const size_t pr = size_t(g.rows - 1 - k::k_modi(f.by0 + cy, g.rows));
+    for (int s = 0; s < slots; ++s) {
+      const uint16_t* p = &prefix_[(pr * size_t(slots) + size_t(s)) * cols1];
+      int m = full * p[g.cols];
+      if (c0 + rest <= g.cols) {
+        m += p[c0 + rest] - p[c0];
+      } else {
+        m += (p[g.cols] - p[c0]) + p[c0 + rest - g.cols];
+      }
+      n[size_t(s)] += m;
+    }
+  }
+  counts.fill(0);
+  for (int s = 0; s < slots; ++s) counts[size_t(class_of_slot_[size_t(s)])] = n[size_t(s)];
+  return true;
+}
+
 k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
   const k::KnitGeom& g = surface.geom();
   k::KnitAggregate a{};
@@ -273,11 +313,22 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
   };
   std::array<Pick, KNIT_MS_MAX_POINTS> picks;  // the first npicks are set
   int npicks = 0;
+  std::array<double, kClasses> counts;
   if (single_class_ >= 0 && one_colour_) {
     // One class, one colour: every cell the same, nothing to visit.
     const float h = hit_fraction(single_class_, dw);
     cells = cell_count(f);
     if (h > 0) hits = cls_hits[size_t(single_class_)] = cells * double(h);
+  } else if (one_colour_ && class_counts(surface, f, counts)) {
+    // One colour: only how many cells of each class matter.
+    for (int cls = 0; cls < kClasses; ++cls) {
+      if (counts[size_t(cls)] <= 0) continue;
+      cells += counts[size_t(cls)];
+      const float h = hit_fraction(cls, dw);
+      if (h <= 0) continue;
+      cls_hits[size_t(cls)] = counts[size_t(cls)] * double(h);
+      hits += cls_hits[size_t(cls)];
+    }
   } else for_each_cell(surface, f, [&](int cls, int k, int c) {
     float& h = cls_hit[size_t(cls)];
     if (h < 0) h = hit_fraction(cls, dw);
@@ -362,6 +413,16 @@ float FootprintTable::hit_fraction(int cls, const DirWeights& d) const {
 float FootprintTable::p_delta(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
   const DirWeights dw = dir_weights(wi);
   if (single_class_ >= 0) return cell_count(f) > 0 ? 1 - hit_fraction(single_class_, dw) : 1.0f;
+  std::array<double, kClasses> counts;
+  if (class_counts(surface, f, counts)) {
+    double cells = 0, hits = 0;
+    for (int cls = 0; cls < kClasses; ++cls)
+      if (counts[size_t(cls)] > 0) {
+        cells += counts[size_t(cls)];
+        hits += counts[size_t(cls)] * double(hit_fraction(cls, dw));
+      }
+    return cells > 0 ? float(1 - hits / cells) : 1.0f;
+  }
   // Only hit fractions: bilinear in direction, per class.
   std::array<float, kClasses> hit;
   hit.fill(-1);

@@ -225,17 +225,20 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
 
   if (params_.mode == KnitMode::MultiScale) {
     const float us = params_.uv_scale;
-    // The footprint's points share the frame at the hit; a frame field
-    // contributes its curvature there (pattern units).
-    const Vec3 kap = frame ? frame->curvature(x, y) : k::kv3(hit.kx / S, hit.ky / S, 0);
     const Vec3 fx = k::kv3(us * hit.dudx, us * hit.dvdx, 0), fy = k::kv3(us * hit.dudy, us * hit.dvdy, 0);
     const int points = footprint_points_for(fx, fy);
     const k::KFootprint f = k::knit_footprint(surface_.geom(), x, y, fx, fy, points, shift[0], shift[1]);
-    const k::KnitAggregate a =
-        table_ && f.stratified ? table_->aggregate(surface_, f, wi)
-                               : k::knit_aggregate(surface_.geom(), surface_.codes(), surface_.colors(), x, y, fx, fy,
-                                                   wi, points, shift[0], shift[1], kap.x, kap.y,
-                                                   params_.capm_options.max_segment, params_.capm_options.max_steps);
+    k::KnitAggregate a;
+    if (table_ && f.stratified) {
+      a = table_->aggregate(surface_, f, wi);  // flat-base statistics: no curvature needed
+    } else {
+      // The footprint's points share the frame at the hit; a frame field
+      // contributes its curvature there (pattern units).
+      const Vec3 kap = frame ? frame->curvature(x, y) : k::kv3(hit.kx / S, hit.ky / S, 0);
+      a = k::knit_aggregate(surface_.geom(), surface_.codes(), surface_.colors(), x, y, fx, fy, wi, points,
+                            shift[0], shift[1], kap.x, kap.y, params_.capm_options.max_segment,
+                            params_.capm_options.max_steps);
+    }
     sh.steps = int(a.steps * float(a.points) + 0.5f);
     if (a.hits == 0) {
       sh.point.p_delta = 1;

@@ -114,10 +114,9 @@ TEST(FootprintTable, MatchesExplicitTubesOverFootprint) {
 }
 
 // The cells of a footprint are visited row by row with the column wrapped
-// by hand: the same footprint moved by whole pattern repeats, to negative
-// coordinates too, must give the same aggregate. And a pattern of one class
-// and one colour skips the visit: stockinette must aggregate as when a
-// second colour index (no effect on geometry) forces the visit.
+// by hand (or counted per class from per-row prefix counts): the same
+// footprint moved by whole pattern repeats, to negative coordinates too,
+// must give the same aggregate.
 TEST(FootprintTable, CellVisitsWrapAndOneClassNeedsNone) {
   std::mt19937 rng(8);
   std::uniform_real_distribution<float> U(0, 1);
@@ -162,23 +161,30 @@ TEST(FootprintTable, CellVisitsWrapAndOneClassNeedsNone) {
       }
     }
   }
-  {
-    // The same cells for both tables (so the same rays build them); only
-    // the colour indices differ.
-    KnitSurface plain(Pattern::from_rows({{0, 0}, {0, 0}}), StitchParams{});
-    KnitSurface coloured(Pattern::from_rows({{0, 0}, {0, 0}}, {{0, 1}, {0, 0}}), StitchParams{});
+  // One colour: a one-class pattern skips the visit, a pattern of several
+  // classes counts its cells per class from per-row prefix counts. Either
+  // must aggregate as when a second colour index (no effect on geometry)
+  // forces the visit of every cell. The same cells for both tables (so the
+  // same rays build them); only the colour indices differ.
+  for (const Pattern& pat : {Pattern::from_rows({{0, 0}, {0, 0}}), pyramid16()}) {
+    std::vector<std::vector<int>> codes(size_t(pat.rows()), std::vector<int>(size_t(pat.cols())));
+    std::vector<std::vector<int>> colours = codes;
+    for (int r = 0; r < pat.rows(); ++r)
+      for (int c = 0; c < pat.cols(); ++c) codes[size_t(r)][size_t(c)] = int(pat.stitch(r, c));
+    colours[0][1] = 1;
+    KnitSurface plain(pat, StitchParams{});
+    KnitSurface coloured(Pattern::from_rows(codes, colours), StitchParams{});
     const FootprintTable tp(plain, CapmOptions{}), tc(coloured, CapmOptions{});
-    ASSERT_EQ(tp.classes_present(), 1);
-    for (int rep = 0; rep < 20; ++rep) {
-      const float size = 6.2831853f * (1.5f + 8 * U(rng));
-      const float x = 200 * U(rng) - 100, y = 200 * U(rng) - 100;
+    for (int rep = 0; rep < 30; ++rep) {
+      const float sx = 6.2831853f * (1.5f + 9 * U(rng)), sy = 6.2831853f * (1.5f + 5 * U(rng));
+      const float x = 400 * U(rng) - 200, y = 400 * U(rng) - 200;
       const float th = 1.3f * U(rng), ph = 6.2831853f * U(rng);
       const k::kvec3 wi = k::kv3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
-      const k::KFootprint fp = k::knit_footprint(plain.geom(), x, y, k::kv3(size, 0, 0), k::kv3(0, size, 0), 4, 0.5f, 0.5f);
-      const k::KFootprint fc = k::knit_footprint(coloured.geom(), x, y, k::kv3(size, 0, 0), k::kv3(0, size, 0), 4, 0.5f, 0.5f);
+      const k::KFootprint fp = k::knit_footprint(plain.geom(), x, y, k::kv3(sx, 0, 0), k::kv3(0, sy, 0), 4, 0.5f, 0.5f);
+      const k::KFootprint fc = k::knit_footprint(coloured.geom(), x, y, k::kv3(sx, 0, 0), k::kv3(0, sy, 0), 4, 0.5f, 0.5f);
       const k::KnitAggregate ap = tp.aggregate(plain, fp, wi), ac = tc.aggregate(coloured, fc, wi);
-      EXPECT_EQ(ap.points, ac.points) << rep;
-      EXPECT_NEAR(ap.p_delta, ac.p_delta, 1e-6) << rep;
+      EXPECT_EQ(ap.points, ac.points) << pat.rows() << " rows, " << rep;
+      EXPECT_NEAR(ap.p_delta, ac.p_delta, 1e-6) << pat.rows() << " rows, " << rep;
       EXPECT_NEAR(ap.n.z, ac.n.z, 1e-6) << rep;
       EXPECT_NEAR(ap.layers, ac.layers, 1e-5) << rep;
       EXPECT_NEAR(ap.sxx, ac.sxx, 1e-5) << rep;

@@ -58,7 +58,9 @@ class FootprintTable {
   // Class (0..9) of cell (row k from the bottom, column c) of the surface.
   static int cell_class(const KnitSurface& surface, int k, int c);
 
-  size_t bytes() const { return sizeof(*this) + stats_.size() * sizeof(Stats) + class_of_.size(); }
+  size_t bytes() const {
+    return sizeof(*this) + stats_.size() * sizeof(Stats) + class_of_.size() + prefix_.size() * sizeof(uint16_t);
+  }
   int classes_present() const;
 
  private:
@@ -89,12 +91,23 @@ class FootprintTable {
     return int64_t(f.ncx) * int64_t(f.ncy) <= KNIT_MS_MAX_POINTS;  // up to 1e5 x 1e5 cells: no int product
   }
   static double cell_count(const k::KFootprint& f) { return all_cells(f) ? double(f.ncx) * f.ncy : double(f.n); }
+  // The number of cells of each class in f's box, from the per-row prefix
+  // counts (a few additions per row of the box instead of a visit per
+  // cell); false when there are none (one class, or a pattern too large
+  // for them) or f's cells are not all visited.
+  bool class_counts(const KnitSurface& surface, const k::KFootprint& f, std::array<double, kClasses>& counts) const;
 
   std::array<int, kClasses> slot_{};  // index into stats_ blocks, -1 when the class is absent
   std::vector<Stats> stats_;          // [slot][theta][phi]
   std::vector<unsigned char> class_of_;  // class of each pattern cell, by knit_cell_index
   bool one_colour_ = true;               // every cell has colour index 0
   int single_class_ = -1;                // the class of every cell, when the pattern has one
+  // Per pattern row (as in class_of_) and slot: how many of the row's first
+  // c cells have that slot's class, c = 0..cols; empty when there is one
+  // class or rows x slots x (cols + 1) exceeds kMaxPrefix.
+  static constexpr size_t kMaxPrefix = size_t(1) << 16;
+  std::vector<uint16_t> prefix_;
+  std::array<int, kClasses> class_of_slot_{};
 };
 
 }  // namespace knit
