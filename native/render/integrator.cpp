@@ -115,6 +115,7 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
         pt = mat->resolve(si, ray, sampler);
         ++stats.resolves;
         if (pt.pass) ++stats.resolve_passes;
+        if (pt.from_table) ++stats.table_resolves;
       } else {
         // Where the interpolated normal puts the viewer on the other side than
         // the geometry does (grazing views of smooth-shaded meshes), shade with

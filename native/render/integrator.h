@@ -23,6 +23,7 @@ struct PathStats {
   uint64_t resolve_passes = 0;  // ... of which passed straight on
   uint64_t shadow_resolves = 0; // shadow-ray crossings of such materials (knit model: transmittance())
   uint64_t shell_bounces = 0;   // bounces that met yarn again inside the same shell (no scene ray)
+  uint64_t table_resolves = 0;  // resolves the knit model read from its multi-scale class table
 
   void add(const PathStats& o) {
     camera_rays += o.camera_rays;
@@ -34,6 +35,7 @@ struct PathStats {
     resolve_passes += o.resolve_passes;
     shadow_resolves += o.shadow_resolves;
     shell_bounces += o.shell_bounces;
+    table_resolves += o.table_resolves;
   }
   uint64_t total_rays() const { return camera_rays + bounce_rays + shadow_rays; }
 };

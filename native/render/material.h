@@ -52,6 +52,7 @@ struct BsdfSample {
 struct PassThrough {
   bool pass = false;
   Rgb weight{1.0f};
+  bool from_table = false;  // the knit model read the hit from its multi-scale class table
 };
 
 class Material {

@@ -146,6 +146,7 @@ PassThrough KnitModelMaterial::resolve(SurfaceInteraction& si, const RayDifferen
   knit::BaseHit hit = base_hit(si, ray.diff_scale);
   const knit::KnitMaterial& model = cone_footprint(si, ray.d, hit) ? *model_ : model_for(hit);
   const knit::KnitShade sh = model.shade(hit, to_kvec(ray.d), frame_.get(), {shift.x, shift.y});
+  pt.from_table = sh.from_table;
   if (sh.pass_through) {
     pt.pass = true;  // no yarn along this ray: it goes on straight
     return pt;

@@ -66,6 +66,12 @@ std::string RenderReport::to_text() const {
                   samples ? double(shadow_resolves) / double(samples) : 0.0,
                   samples ? double(shell_bounces) / double(samples) : 0.0);
     s += buf;
+    if (table_resolves > 0) {
+      std::snprintf(buf, sizeof buf, "  multi-scale %.1f%% of the knit hits from the class table, %.1f%% marched\n",
+                    100.0 * double(table_resolves) / double(resolves),
+                    100.0 - 100.0 * double(table_resolves) / double(resolves));
+      s += buf;
+    }
     if (explicit_yarns) {
       std::snprintf(buf, sizeof buf,
                     "  yarns       explicit: %zu points, %zu segments, %zu curves (built in %.2f s); geometry %s, "
@@ -118,7 +124,7 @@ std::string RenderReport::to_json() const {
                        {"embree_yarns", embree_yarn_bytes}};
   j["knit"] = {{"materials", knit_materials}, {"explicit_yarns", explicit_yarns},
                {"hits", resolves}, {"hits_passed", resolve_passes}, {"shadow_crossings", shadow_resolves},
-               {"shell_bounces", shell_bounces},
+               {"shell_bounces", shell_bounces}, {"table_hits", table_resolves},
                {"yarn_points", yarn_points}, {"yarn_segments", yarn_segments}, {"yarn_curves", yarn_curves},
                {"yarn_build_seconds", yarn_build_seconds}};
   return j.dump(2) + "\n";

@@ -231,6 +231,7 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     k::KnitAggregate a;
     if (table_ && f.stratified) {
       a = table_->aggregate(surface_, f, wi);  // flat-base statistics: no curvature needed
+      sh.from_table = true;
     } else {
       // The footprint's points share the frame at the hit; a frame field
       // contributes its curvature there (pattern units).

@@ -112,6 +112,7 @@ TEST(Cli, RendersKnitWithTheModelAndAsExplicitYarns) {
   EXPECT_EQ(rm["knit"]["materials"], 1);
   EXPECT_EQ(rm["knit"]["explicit_yarns"], false);
   EXPECT_GT(rm["knit"]["hits"].get<uint64_t>(), 0u);
+  EXPECT_EQ(rm["knit"]["table_hits"], 0);  // near field: no class table
   EXPECT_GT(rm["memory_bytes"]["knit_state"].get<uint64_t>(), 0u);
   EXPECT_EQ(rm["memory_bytes"]["yarn_geometry"], 0);
   EXPECT_EQ(rm["triangles"], 2);

@@ -331,12 +331,20 @@ TEST(KnitFurnace, NearField) {
   EXPECT_EQ(r.result.stats.invalid_samples, 0u);
   EXPECT_GT(r.result.stats.resolves, 24u * 24u * 48u / 2);
   EXPECT_GT(r.result.stats.resolve_passes, 0u);
+  EXPECT_EQ(r.result.stats.table_resolves, 0u);
   expect_white_furnace(r.image, "near field");
 }
 
 TEST(KnitFurnace, MultiScale) {
   const auto r = test::render_text(test::test_dir(), furnace_scene("multi_scale", false));
   EXPECT_EQ(r.result.stats.invalid_samples, 0u);
+  // The hits the class table served (footprints of a cell or more, camera
+  // rays and ray cones after bounces; the report prints their share).
+  std::printf("[furnace] multi-scale: %.1f%% of %llu knit hits from the class table\n",
+              100.0 * double(r.result.stats.table_resolves) / double(r.result.stats.resolves),
+              static_cast<unsigned long long>(r.result.stats.resolves));
+  EXPECT_GT(r.result.stats.table_resolves, 0u);
+  EXPECT_LE(r.result.stats.table_resolves, r.result.stats.resolves);
   expect_white_furnace(r.image, "multi-scale");
 }
 

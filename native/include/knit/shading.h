@@ -60,6 +60,7 @@ struct KnitShade {
   Rgb kd_r, kd_t;            // body colours at this point (multi-scale: mixed over the footprint)
   k::KMicrofacet spec_r{}, spec_t{};  // specular lobes at this point (multi-scale: LEAN-widened)
   int steps = 0;             // CAPM segments marched (summed over footprint points)
+  bool from_table = false;   // multi-scale: the footprint came from the class table (no march)
   // Near field: the yarn point hit, inside the shell (pattern space). Light
   // and bounces leaving it cross the rest of the shell first: occluded_from
   // and shade_from march from it.
