@@ -96,7 +96,7 @@ KNIT_STRUCT(KFootprint)
   float shift_x, shift_y;
   int stratified;      /* 1: cell-stratified placement */
   int ncx, ncy;        /* cells covered (stratified) */
-  int bx0, by0;        /* first covered cell */
+  int bx0, by0;        /* first cell of the box (the ncx x ncy cells nearest the footprint) */
   int n;               /* points */
 KNIT_STRUCT_END(KFootprint)
 
@@ -117,8 +117,12 @@ KNIT_FN KFootprint knit_footprint(KNIT_IN(KnitGeom) g, float x, float y, kvec3 f
   f.stratified = (ex >= KF(1.0) && ey >= KF(1.0)) ? 1 : 0;
   f.ncx = KINT(k_floor(ex));
   f.ncy = KINT(k_floor(ey));
-  f.bx0 = KINT(k_floor((x - KF(0.5) * ex * cw) / cw + KF(0.5) * (ex - KFLT(f.ncx))));
-  f.by0 = KINT(k_floor((y - KF(0.5) * ey * ch) / ch + KF(0.5) * (ey - KFLT(f.ncy))));
+  /* The ncx x ncy whole cells nearest the footprint: the box's first cell
+   * rounded (not floored) from x / cw - ncx / 2, so that the box is centred
+   * on the footprint within half a cell (a floor put it up to a whole cell
+   * left of and below it, half a cell on average). */
+  f.bx0 = KINT(k_floor(x / cw - KF(0.5) * KFLT(f.ncx) + KF(0.5)));
+  f.by0 = KINT(k_floor(y / ch - KF(0.5) * KFLT(f.ncy) + KF(0.5)));
   f.n = k_maxi(1, k_mini(n_points, KNIT_MS_MAX_POINTS));
   if (f.stratified != 0) {
     float cells = KFLT(f.ncx) * KFLT(f.ncy);

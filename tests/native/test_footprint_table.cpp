@@ -136,8 +136,8 @@ TEST(FootprintTable, CellVisitsWrapAndOneClassNeedsNone) {
       const float th = 1.3f * U(rng), ph = 6.2831853f * U(rng);
       const k::kvec3 wi = k::kv3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
       auto at = [&](int mx, int my) {
-        const float x = (float(cx + 16 * mx) + 0.5f + 0.5f * float(nx)) * cw;
-        const float y = (float(cy + 16 * my) + 0.5f + 0.5f * float(ny)) * ch;
+        const float x = (float(cx + 16 * mx) + 0.5f * float(nx)) * cw;
+        const float y = (float(cy + 16 * my) + 0.5f * float(ny)) * ch;
         return k::knit_footprint(s.geom(), x, y, k::kv3(w, 0, 0), k::kv3(0, h, 0), 4, 0.5f, 0.5f);
       };
       const k::KFootprint f0 = at(0, 0);

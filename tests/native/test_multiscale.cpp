@@ -23,6 +23,37 @@ k::KnitAggregate aggregate(const KnitSurface& s, float x, float y, float size, k
                            n, shift_x, shift_y, 0, 0, 6.2832f, 32);
 }
 
+// A stratified footprint is averaged over the ncx x ncy whole cells nearest
+// its centre: the box of cells must be centred on the footprint within half
+// a cell in each direction, and overlap it at least as much as the box one
+// cell over on either side.
+TEST(MultiScale, WholeCellBoxIsCentredOnTheFootprint) {
+  KnitSurface s(seed(), StitchParams{});
+  const float cw = 6.2831853f, ch = s.geom().row_spacing;
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> U(0, 1);
+  // Overlap in one axis of [lo, lo + n) with [a, b] (cell units).
+  auto overlap = [](double lo, int n, double a, double b) {
+    return std::max(0.0, std::min(lo + n, b) - std::max(lo, a));
+  };
+  double worst = 0;
+  for (int rep = 0; rep < 2000; ++rep) {
+    const float x = 200 * U(rng) - 100, y = 200 * U(rng) - 100;
+    const float w = cw * (1 + 5 * U(rng)), h = ch * (1 + 5 * U(rng));
+    const k::KFootprint f = k::knit_footprint(s.geom(), x, y, k::kv3(w, 0, 0), k::kv3(0, h, 0), 4, 0.5f, 0.5f);
+    ASSERT_EQ(f.stratified, 1);
+    const double cx = double(x) / cw, cy = double(y) / ch;  // centre, cell units
+    const double ox = f.bx0 + 0.5 * f.ncx - cx, oy = f.by0 + 0.5 * f.ncy - cy;
+    worst = std::max({worst, std::abs(ox), std::abs(oy)});
+    EXPECT_LE(std::abs(ox), 0.5 + 1e-4) << "x " << x << " width " << w / cw << " cells";
+    EXPECT_LE(std::abs(oy), 0.5 + 1e-4) << "y " << y << " height " << h / ch << " cells";
+    const double ax = cx - 0.5 * w / cw, bx = cx + 0.5 * w / cw;
+    for (int d : {-1, 1})
+      EXPECT_GE(overlap(f.bx0, f.ncx, ax, bx) + 1e-4, overlap(f.bx0 + d, f.ncx, ax, bx)) << "x " << x;
+  }
+  std::printf("[footprint] worst offset of the whole-cell box from the footprint's centre: %.3f cells\n", worst);
+}
+
 // Grazing rays have huge ray differentials: the aggregate stays bounded
 // (at most KNIT_MS_MAX_POINTS points, finite outputs) and still averages
 // the fabric (p_delta near the gap fraction of a large footprint).
