@@ -266,6 +266,11 @@ void FootprintTable::for_each_cell(const KnitSurface& surface, const k::KFootpri
 
 bool FootprintTable::class_counts(const KnitSurface& surface, const k::KFootprint& f,
                                   std::array<double, kClasses>& counts) const {
+  counts.fill(0);
+  if (single_class_ >= 0) {
+    counts[size_t(single_class_)] = cell_count(f);
+    return true;
+  }
   if (prefix_.empty() || !all_cells(f)) return false;
   const k::KnitGeom& g = surface.geom();
   const int slots = classes_present();
@@ -287,9 +292,20 @@ bool FootprintTable::class_counts(const KnitSurface& surface, const k::KFootprin
       n[size_t(s)] += m;
     }
   }
-  counts.fill(0);
   for (int s = 0; s < slots; ++s) counts[size_t(class_of_slot_[size_t(s)])] = n[size_t(s)];
   return true;
+}
+
+void FootprintTable::counted_hits(const std::array<double, kClasses>& counts, const DirWeights& d,
+                                  std::array<double, kClasses>& cls_hits, double& cells, double& hits) const {
+  for (int cls = 0; cls < kClasses; ++cls) {
+    if (counts[size_t(cls)] <= 0) continue;
+    cells += counts[size_t(cls)];
+    const float h = hit_fraction(cls, d);
+    if (h <= 0) continue;
+    cls_hits[size_t(cls)] = counts[size_t(cls)] * double(h);
+    hits += cls_hits[size_t(cls)];
+  }
 }
 
 k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
@@ -314,21 +330,9 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
   std::array<Pick, KNIT_MS_MAX_POINTS> picks;  // the first npicks are set
   int npicks = 0;
   std::array<double, kClasses> counts;
-  if (single_class_ >= 0 && one_colour_) {
-    // One class, one colour: every cell the same, nothing to visit.
-    const float h = hit_fraction(single_class_, dw);
-    cells = cell_count(f);
-    if (h > 0) hits = cls_hits[size_t(single_class_)] = cells * double(h);
-  } else if (one_colour_ && class_counts(surface, f, counts)) {
+  if (one_colour_ && class_counts(surface, f, counts)) {
     // One colour: only how many cells of each class matter.
-    for (int cls = 0; cls < kClasses; ++cls) {
-      if (counts[size_t(cls)] <= 0) continue;
-      cells += counts[size_t(cls)];
-      const float h = hit_fraction(cls, dw);
-      if (h <= 0) continue;
-      cls_hits[size_t(cls)] = counts[size_t(cls)] * double(h);
-      hits += cls_hits[size_t(cls)];
-    }
+    counted_hits(counts, dw, cls_hits, cells, hits);
   } else for_each_cell(surface, f, [&](int cls, int k, int c) {
     float& h = cls_hit[size_t(cls)];
     if (h < 0) h = hit_fraction(cls, dw);
@@ -412,21 +416,15 @@ float FootprintTable::hit_fraction(int cls, const DirWeights& d) const {
 
 float FootprintTable::p_delta(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
   const DirWeights dw = dir_weights(wi);
-  if (single_class_ >= 0) return cell_count(f) > 0 ? 1 - hit_fraction(single_class_, dw) : 1.0f;
-  std::array<double, kClasses> counts;
+  double cells = 0, hits = 0;
+  std::array<double, kClasses> counts, cls_hits{};
   if (class_counts(surface, f, counts)) {
-    double cells = 0, hits = 0;
-    for (int cls = 0; cls < kClasses; ++cls)
-      if (counts[size_t(cls)] > 0) {
-        cells += counts[size_t(cls)];
-        hits += counts[size_t(cls)] * double(hit_fraction(cls, dw));
-      }
+    counted_hits(counts, dw, cls_hits, cells, hits);
     return cells > 0 ? float(1 - hits / cells) : 1.0f;
   }
   // Only hit fractions: bilinear in direction, per class.
   std::array<float, kClasses> hit;
   hit.fill(-1);
-  double cells = 0, hits = 0;
   for_each_cell(surface, f, [&](int cls, int, int) {
     float& h = hit[size_t(cls)];
     if (h < 0) h = hit_fraction(cls, dw);

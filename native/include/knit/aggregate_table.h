@@ -91,11 +91,16 @@ class FootprintTable {
     return int64_t(f.ncx) * int64_t(f.ncy) <= KNIT_MS_MAX_POINTS;  // up to 1e5 x 1e5 cells: no int product
   }
   static double cell_count(const k::KFootprint& f) { return all_cells(f) ? double(f.ncx) * f.ncy : double(f.n); }
-  // The number of cells of each class in f's box, from the per-row prefix
-  // counts (a few additions per row of the box instead of a visit per
-  // cell); false when there are none (one class, or a pattern too large
-  // for them) or f's cells are not all visited.
+  // The number of cells of each class for f without visiting them: all of
+  // them for a pattern of one class, else from the per-row prefix counts (a
+  // few additions per row of the box instead of a visit per cell); false
+  // when there are no prefix counts (a pattern too large for them) or f's
+  // cells are not all visited.
   bool class_counts(const KnitSurface& surface, const k::KFootprint& f, std::array<double, kClasses>& counts) const;
+  // Adds the counted cells to `cells`, their hits to `hits` and sets the
+  // hits by class, from the classes' hit fractions in direction d.
+  void counted_hits(const std::array<double, kClasses>& counts, const DirWeights& d,
+                    std::array<double, kClasses>& cls_hits, double& cells, double& hits) const;
 
   std::array<int, kClasses> slot_{};  // index into stats_ blocks, -1 when the class is absent
   std::vector<Stats> stats_;          // [slot][theta][phi]
