@@ -322,13 +322,6 @@ Lobe lobe_arg(::py::handle h) {
                          std::string(::py::str(::py::type::handle_of(h).attr("__name__"))));
 }
 
-// Rows run through for_each_row (bindings.h): in parallel from
-// kParallelRows rows up.
-template <class F>
-void run_rows(ssize_t n, F&& body) {
-  for_each_row(long(n), [&](long i) { body(ssize_t(i)); });
-}
-
 void put3(::py::array_t<double>& a, ssize_t i, double x, double y, double z) {
   double* p = a.mutable_data(i, 0);
   p[0] = x;
@@ -351,7 +344,7 @@ void put3(::py::array_t<double>& a, ssize_t i, const Rgb& c) { put3(a, i, c.r, c
   const ssize_t n = bc.n();
   ::py::array_t<double> out = out_rows(n, 3);
   double* o = out.mutable_data();
-  run_rows(n, [&](ssize_t i) {
+  for_each_row(n, [&](ssize_t i) {
     const Rgb c = b.eval(wo.vec(i), wi.vec(i), pt.at(i));
     o[3 * i] = c.r;
     o[3 * i + 1] = c.g;
@@ -373,7 +366,7 @@ void put3(::py::array_t<double>& a, ssize_t i, const Rgb& c) { put3(a, i, c.r, c
   const ssize_t n = bc.n();
   ::py::array_t<double> out(n);
   double* o = out.mutable_data();
-  run_rows(n, [&](ssize_t i) { o[i] = b.pdf(wo.vec(i), wi.vec(i), pt.at(i)); });
+  for_each_row(n, [&](ssize_t i) { o[i] = b.pdf(wo.vec(i), wi.vec(i), pt.at(i)); });
   return out;
 }
 
@@ -404,7 +397,7 @@ void put3(::py::array_t<double>& a, ssize_t i, const Rgb& c) { put3(a, i, c.r, c
   double* pp = pdf.mutable_data();
   int32_t* pf = flags.mutable_data();
   bool* pv = valid.mutable_data();
-  run_rows(n, [&](ssize_t i) {
+  for_each_row(n, [&](ssize_t i) {
     const double* ur = u.row(i);
     const std::array<float, 3> uf = {std::min(float(ur[0]), kBelowOne),
                                      std::min(float(ur[1]), kBelowOne),
@@ -443,7 +436,7 @@ void put3(::py::array_t<double>& a, ssize_t i, const Rgb& c) { put3(a, i, c.r, c
   const ssize_t n = bc.n();
   ::py::array_t<double> out = out_rows(n, 3);
   double* o = out.mutable_data();
-  run_rows(n, [&](ssize_t i) {
+  for_each_row(n, [&](ssize_t i) {
     const Rgb c = b.eval_lobe(lobe, wo.vec(i), wi.vec(i), pt.at(i));
     o[3 * i] = c.r;
     o[3 * i + 1] = c.g;
@@ -463,7 +456,7 @@ void put3(::py::array_t<double>& a, ssize_t i, const Rgb& c) { put3(a, i, c.r, c
   const ssize_t n = bc.n();
   ::py::array_t<double> out = out_rows(n, 4);
   double* o = out.mutable_data();
-  run_rows(n, [&](ssize_t i) {
+  for_each_row(n, [&](ssize_t i) {
     const std::array<float, 4> q = b.lobe_probabilities(wo.vec(i), pt.at(i));
     for (int k = 0; k < 4; ++k) o[4 * i + k] = q[size_t(k)];
   });
@@ -509,7 +502,7 @@ PlyProfile make_ply(int ply_count, ::py::object ply_radius, double ply_twist, in
   double* g = shadow.mutable_data();
   double* gp = ply_shadow.mutable_data();
   double* gf = fiber_shadow.mutable_data();
-  run_rows(n, [&](ssize_t i) {
+  for_each_row(n, [&](ssize_t i) {
     const float ph = float(phi.at(i)), ss = float(s.at(i));
     const k::KPlyShade r = table ? ply.lookup(ph, ss) : ply.procedural(ph, ss);
     g[i] = r.shadow;
@@ -748,7 +741,7 @@ HitArgs hit_args(const KnitMaterial& m, ::py::handle u, ::py::handle v, ::py::ha
   double* pg = shadow.mutable_data();
   double* pd = p_delta.mutable_data();
   double* pa = alpha.mutable_data();
-  run_rows(n, [&](ssize_t i) {
+  for_each_row(n, [&](ssize_t i) {
     const KnitShade sh = m.shade(a.hit(i), a.ray.vec(i), a.frame, a.shift_at(i));
     ppass[i] = sh.pass_through;
     pback[i] = sh.from_back;
@@ -799,7 +792,7 @@ HitArgs hit_args(const KnitMaterial& m, ::py::handle u, ::py::handle v, ::py::ha
 ::py::array_t<double> material_transmittance(const KnitMaterial& m, const HitArgs& a) {
   ::py::array_t<double> out(a.count);
   double* o = out.mutable_data();
-  run_rows(a.count, [&](ssize_t i) {
+  for_each_row(a.count, [&](ssize_t i) {
     o[i] = m.transmittance(a.hit(i), a.ray.vec(i), a.frame, a.shift_at(i));
   });
   return out;

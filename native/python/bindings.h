@@ -23,14 +23,14 @@ inline std::string num(double v) {
 // body writes only row i of its outputs through raw pointers taken with the
 // GIL held. A C++ exception (which the validation at the boundary should
 // have made impossible) surfaces as ValueError once all rows are done.
-constexpr long kParallelRows = 1024;
+constexpr pybind11::ssize_t kParallelRows = 1024;
 template <class F>
-void for_each_row(long n, F&& body) {
+void for_each_row(pybind11::ssize_t n, F&& body) {
   std::string error;
   std::mutex error_mutex;
-  auto rows = [&](long begin, long end) {
+  auto rows = [&](pybind11::ssize_t begin, pybind11::ssize_t end) {
     try {
-      for (long i = begin; i < end; ++i) body(i);
+      for (pybind11::ssize_t i = begin; i < end; ++i) body(i);
     } catch (const std::exception& e) {
       const std::lock_guard<std::mutex> lock(error_mutex);
       if (error.empty()) error = e.what();
@@ -41,8 +41,8 @@ void for_each_row(long n, F&& body) {
     if (n < kParallelRows) {
       rows(0, n);
     } else {
-      tbb::parallel_for(tbb::blocked_range<long>(0, n, 256),
-                        [&](const tbb::blocked_range<long>& r) { rows(r.begin(), r.end()); });
+      tbb::parallel_for(tbb::blocked_range<pybind11::ssize_t>(0, n, 256),
+                        [&](const tbb::blocked_range<pybind11::ssize_t>& r) { rows(r.begin(), r.end()); });
     }
   }
   if (!error.empty()) throw pybind11::value_error(error);
