@@ -271,28 +271,36 @@ bool FootprintTable::class_counts(const KnitSurface& surface, const k::KFootprin
     counts[size_t(single_class_)] = cell_count(f);
     return true;
   }
-  if (prefix_.empty() || !all_cells(f)) return false;
+  if (prefix_.empty()) return false;
   const k::KnitGeom& g = surface.geom();
   const int slots = classes_present();
   const size_t cols1 = size_t(g.cols) + 1;
   // Columns [c0, c0 + ncx) of a row, wrapped: `full` whole rows and a rest.
   const int c0 = k::k_modi(f.bx0, g.cols);
-  const int full = f.ncx / g.cols, rest = f.ncx % g.cols;
-  std::array<int, kClasses> n{};  // by slot
-  for (int cy = 0; cy < f.ncy; ++cy) {
+  const int64_t full = f.ncx / g.cols;
+  const int rest = f.ncx % g.cols;
+  // Rows [by0, by0 + ncy), wrapped: the first min(ncy, rows) of them stand
+  // for every row of the box, the first ncy % rows once more than the
+  // others. A box of up to 1e5 x 1e5 cells (knit_footprint's cap) costs at
+  // most a pass over the pattern's rows.
+  const int nr = std::min(f.ncy, g.rows);
+  const int64_t per = f.ncy / g.rows, extra = f.ncy % g.rows;
+  std::array<int64_t, kClasses> n{};  // by slot
+  for (int cy = 0; cy < nr; ++cy) {
     const size_t pr = size_t(g.rows - 1 - k::k_modi(f.by0 + cy, g.rows));
+    const int64_t times = per + (cy < extra ? 1 : 0);
     for (int s = 0; s < slots; ++s) {
       const uint16_t* p = &prefix_[(pr * size_t(slots) + size_t(s)) * cols1];
-      int m = full * p[g.cols];
+      int64_t m = full * p[g.cols];
       if (c0 + rest <= g.cols) {
         m += p[c0 + rest] - p[c0];
       } else {
         m += (p[g.cols] - p[c0]) + p[c0 + rest - g.cols];
       }
-      n[size_t(s)] += m;
+      n[size_t(s)] += times * m;
     }
   }
-  for (int s = 0; s < slots; ++s) counts[size_t(class_of_slot_[size_t(s)])] = n[size_t(s)];
+  for (int s = 0; s < slots; ++s) counts[size_t(class_of_slot_[size_t(s)])] = double(n[size_t(s)]);
   return true;
 }
 
@@ -329,18 +337,21 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
   };
   std::array<Pick, KNIT_MS_MAX_POINTS> picks;  // the first npicks are set
   int npicks = 0;
+  // How many cells of each class the box holds, when the table can count
+  // them (see class_counts): then the geometry needs no visit, and the
+  // colours (several colour indices) only visit the cells they need.
   std::array<double, kClasses> counts;
-  if (one_colour_ && class_counts(surface, f, counts)) {
-    // One colour: only how many cells of each class matter.
-    counted_hits(counts, dw, cls_hits, cells, hits);
-  } else for_each_cell(surface, f, [&](int cls, int k, int c) {
+  const bool counted = class_counts(surface, f, counts);
+  if (counted) counted_hits(counts, dw, cls_hits, cells, hits);
+  double visit_hits = 0;  // hits of the visited cells (the colours' weights)
+  if (!counted || !one_colour_) for_each_cell(surface, f, [&](int cls, int k, int c) {
     float& h = cls_hit[size_t(cls)];
     if (h < 0) h = hit_fraction(cls, dw);
-    cells += 1;
+    if (!counted) cells += 1;
     if (h <= 0) return;
     const float w = h;
-    hits += w;
-    cls_hits[size_t(cls)] += w;
+    visit_hits += w;
+    if (!counted) cls_hits[size_t(cls)] += w;
     if (one_colour_) return;
     if (!near_ready[size_t(cls)]) {
       const Stats s = lookup(cls, dw);
@@ -362,11 +373,14 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
           colour = col;
         }
       }
-    if (npicks < KNIT_MS_MAX_POINTS) picks[size_t(npicks++)] = {colour, float(hits)};
+    if (npicks < KNIT_MS_MAX_POINTS) picks[size_t(npicks++)] = {colour, float(visit_hits)};
   });
-  a.points = int(cells);
+  if (!counted) hits = visit_hits;
+  // In points: the cells of a box of up to KNIT_MS_MAX_POINTS, else the
+  // footprint's points (a counted box may hold up to 1e10 cells).
+  a.points = all_cells(f) ? int(cells) : f.n;
   a.p_delta = cells > 0 ? float(1 - hits / cells) : 1.0f;
-  a.hits = hits > 0 ? std::max(1, int(std::lround(hits))) : 0;
+  a.hits = hits > 0 ? std::max(1, int(std::lround(hits / cells * a.points))) : 0;
   a.steps = 0;
   a.color_pick = -1;
   if (hits <= 0) {
@@ -381,7 +395,6 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
   for (int cls = 0; cls < kClasses; ++cls)
     if (cls_hits[size_t(cls)] > 0) mix.add(lookup(cls, dw), float(cls_hits[size_t(cls)]));
   const Stats m = mix.result(float(hits / cells));
-  const double inv = 1 / hits;
   a.n = k::kv3_normalize(k::kv3(m.nx, m.ny, m.nz));
   a.tangent = k::kv3(m.tx, m.ty, m.tz);
   a.position = k::kv3(f.x, f.y, m.z);
@@ -394,9 +407,19 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
     a.color_pick = 0;
     return a;
   }
+  if (visit_hits <= 0) {
+    // The visited cells (the points of a box too large to visit) all missed
+    // where the counted ones did not: the colour of the centre's cell.
+    const int col = surface.colors()[k::knit_cell_index(g, int(std::floor(f.y / g.row_spacing)),
+                                                        int(std::floor(f.x / K_2PI)))];
+    a.color_w[std::clamp(col, 0, KNIT_MS_COLORS - 1)] = 1;
+    a.color_pick = col;
+    return a;
+  }
+  const double inv = 1 / visit_hits;
   for (float& w : a.color_w) w = float(w * inv);
   // One cell's colour, chosen in proportion to its hits by the footprint's shift.
-  const float u = k::knit_frac(f.shift_x * 7 + f.shift_y * 3 + 0.5f) * float(hits);
+  const float u = k::knit_frac(f.shift_x * 7 + f.shift_y * 3 + 0.5f) * float(visit_hits);
   for (int i = 0; i < npicks; ++i)
     if (picks[size_t(i)].cum >= u || i == npicks - 1) {
       a.color_pick = picks[size_t(i)].colour;

@@ -161,11 +161,11 @@ TEST(FootprintTable, CellVisitsWrapAndOneClassNeedsNone) {
       }
     }
   }
-  // One colour: a one-class pattern skips the visit, a pattern of several
-  // classes counts its cells per class from per-row prefix counts. Either
-  // must aggregate as when a second colour index (no effect on geometry)
-  // forces the visit of every cell. The same cells for both tables (so the
-  // same rays build them); only the colour indices differ.
+  // The cells of a box are counted per class (one class: no count at all;
+  // several: per-row prefix counts, the rows of a box taller than the
+  // pattern grouped by repeat), for boxes of any size, with one colour
+  // index or several. The reference: the box's cells enumerated one by one,
+  // each aggregated as a footprint of that single cell, averaged in double.
   for (const Pattern& pat : {Pattern::from_rows({{0, 0}, {0, 0}}), pyramid16()}) {
     std::vector<std::vector<int>> codes(size_t(pat.rows()), std::vector<int>(size_t(pat.cols())));
     std::vector<std::vector<int>> colours = codes;
@@ -175,21 +175,47 @@ TEST(FootprintTable, CellVisitsWrapAndOneClassNeedsNone) {
     KnitSurface plain(pat, StitchParams{});
     KnitSurface coloured(Pattern::from_rows(codes, colours), StitchParams{});
     const FootprintTable tp(plain, CapmOptions{}), tc(coloured, CapmOptions{});
+    const float cw = 6.2831853f, ch = plain.geom().row_spacing;
+    int large = 0;
     for (int rep = 0; rep < 30; ++rep) {
-      const float sx = 6.2831853f * (1.5f + 9 * U(rng)), sy = 6.2831853f * (1.5f + 5 * U(rng));
+      // 1.5 to 41.5 cells a side: up to 1,600 cells, and up to 2.6 repeats of the 16 x 16 pyramid.
+      const float sx = cw * (1.5f + 40 * U(rng) * U(rng)), sy = ch * (1.5f + 40 * U(rng) * U(rng));
       const float x = 400 * U(rng) - 200, y = 400 * U(rng) - 200;
       const float th = 1.3f * U(rng), ph = 6.2831853f * U(rng);
       const k::kvec3 wi = k::kv3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
       const k::KFootprint fp = k::knit_footprint(plain.geom(), x, y, k::kv3(sx, 0, 0), k::kv3(0, sy, 0), 4, 0.5f, 0.5f);
       const k::KFootprint fc = k::knit_footprint(coloured.geom(), x, y, k::kv3(sx, 0, 0), k::kv3(0, sy, 0), 4, 0.5f, 0.5f);
+      ASSERT_EQ(fp.stratified, 1);
+      large += int64_t(fp.ncx) * fp.ncy > KNIT_MS_MAX_POINTS ? 1 : 0;
+      double ref_hits = 0, ref_layers = 0;
+      for (int ky = 0; ky < fp.ncy; ++ky)
+        for (int kx = 0; kx < fp.ncx; ++kx) {
+          const float cx = (float(fp.bx0 + kx) + 0.5f) * cw, cy = (float(fp.by0 + ky) + 0.5f) * ch;
+          const k::KFootprint one =
+              k::knit_footprint(plain.geom(), cx, cy, k::kv3(1.01f * cw, 0, 0), k::kv3(0, 1.01f * ch, 0), 4, 0.5f, 0.5f);
+          ASSERT_EQ(one.ncx * one.ncy, 1);
+          ASSERT_EQ(one.bx0, fp.bx0 + kx);
+          ASSERT_EQ(one.by0, fp.by0 + ky);
+          const k::KnitAggregate c = tp.aggregate(plain, one, wi);
+          ref_hits += 1.0 - double(c.p_delta);
+          ref_layers += (1.0 - double(c.p_delta)) * double(c.layers);
+        }
+      const double ref_pd = 1 - ref_hits / (double(fp.ncx) * fp.ncy);
       const k::KnitAggregate ap = tp.aggregate(plain, fp, wi), ac = tc.aggregate(coloured, fc, wi);
-      EXPECT_EQ(ap.points, ac.points) << pat.rows() << " rows, " << rep;
-      EXPECT_NEAR(ap.p_delta, ac.p_delta, 1e-6) << pat.rows() << " rows, " << rep;
-      EXPECT_NEAR(ap.n.z, ac.n.z, 1e-6) << rep;
-      EXPECT_NEAR(ap.layers, ac.layers, 1e-5) << rep;
-      EXPECT_NEAR(ap.sxx, ac.sxx, 1e-5) << rep;
-      EXPECT_NEAR(tp.p_delta(plain, fp, wi), ap.p_delta, 1e-6) << rep;
+      const std::string what = std::to_string(pat.rows()) + " rows, footprint " + std::to_string(rep) + " (" +
+                               std::to_string(fp.ncx) + " x " + std::to_string(fp.ncy) + " cells)";
+      EXPECT_NEAR(ap.p_delta, ref_pd, 2e-5) << what;
+      if (ref_hits > 0) EXPECT_NEAR(ap.layers, ref_layers / ref_hits, 1e-4) << what;
+      EXPECT_LE(ap.points, KNIT_MS_MAX_POINTS) << what;
+      EXPECT_EQ(ap.points, ac.points) << what;
+      EXPECT_NEAR(ap.p_delta, ac.p_delta, 1e-6) << what;
+      EXPECT_NEAR(ap.n.z, ac.n.z, 1e-6) << what;
+      EXPECT_NEAR(ap.layers, ac.layers, 1e-5) << what;
+      EXPECT_NEAR(ap.sxx, ac.sxx, 1e-5) << what;
+      EXPECT_NEAR(tp.p_delta(plain, fp, wi), ap.p_delta, 1e-6) << what;
+      EXPECT_NEAR(tc.p_delta(coloured, fc, wi), ap.p_delta, 1e-6) << what;
     }
+    EXPECT_GE(large, 5) << "footprints of more than KNIT_MS_MAX_POINTS cells tested";
   }
 }
 
@@ -266,8 +292,9 @@ TEST(FootprintTable, MaterialUsesItOnlyForLargeFootprints) {
 }
 
 // Grazing rays have huge ray differentials (clamped to 1e5 cells per axis by
-// knit_footprint): the table then reads the cells of the footprint's points,
-// never the 1e10 cells of its box, and stays finite.
+// knit_footprint): the table counts the 1e10 cells of such a box by pattern
+// repeats (never one by one), reports the footprint's points, not its
+// cells, and stays finite.
 TEST(FootprintTable, HugeFootprintsStayBounded) {
   KnitSurface s(seed(), StitchParams{});
   const FootprintTable table(s, CapmOptions{}, 16);

@@ -49,8 +49,12 @@ class FootprintTable {
 
   // The aggregate over footprint f (stratified: a cell or more in both
   // directions, see knit_footprint) seen from wi_local (unit, towards the
-  // viewer, either side). The cells of f's box are all counted when there
-  // are at most KNIT_MS_MAX_POINTS of them, else the cells of f's points.
+  // viewer, either side). The geometry averages every cell of f's box,
+  // counted per class (class_counts); the colours of a pattern of several
+  // colour indices visit the box's cells when there are at most
+  // KNIT_MS_MAX_POINTS of them, else the cells of f's points. (Without
+  // prefix counts, a pattern too large for them, the geometry visits the
+  // same cells as the colours.)
   k::KnitAggregate aggregate(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi_local) const;
   // Only its p_delta (shadow rays).
   float p_delta(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi_local) const;
@@ -92,10 +96,10 @@ class FootprintTable {
   }
   static double cell_count(const k::KFootprint& f) { return all_cells(f) ? double(f.ncx) * f.ncy : double(f.n); }
   // The number of cells of each class for f without visiting them: all of
-  // them for a pattern of one class, else from the per-row prefix counts (a
-  // few additions per row of the box instead of a visit per cell); false
-  // when there are no prefix counts (a pattern too large for them) or f's
-  // cells are not all visited.
+  // them for a pattern of one class (cell_count), else from the per-row
+  // prefix counts, a few additions per row of the box (at most one pass over
+  // the pattern's rows for a box of any height) instead of a visit per cell;
+  // false when there are no prefix counts (a pattern too large for them).
   bool class_counts(const KnitSurface& surface, const k::KFootprint& f, std::array<double, kClasses>& counts) const;
   // Adds the counted cells to `cells`, their hits to `hits` and sets the
   // hits by class, from the classes' hit fractions in direction d.
