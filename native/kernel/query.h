@@ -93,6 +93,21 @@ KNIT_FN float knit_segment_box_entry(kvec3 pa, kvec3 inv, KNIT_IN(KBox) b, float
   return t0;
 }
 
+/* The range of u over which pa + u dv lies inside the slab [lo, hi] of
+ * one axis (p = that axis of pa, iv = of knit_segment_inv): KX..KY, empty
+ * when KX > KY. Unbounded ([-K_BIG, K_BIG]) for an axis the segment does not
+ * move along and starts inside. knit_segment_box_entry's test, one axis. */
+KNIT_FN kvec3 knit_slab_range(float lo, float hi, float p, float iv) {
+  float ta, tb;
+  if (iv == KF(0.0)) {
+    if (p < lo || p > hi) return kv3(K_BIG, -K_BIG, KF(0.0));
+    return kv3(-K_BIG, K_BIG, KF(0.0));
+  }
+  ta = (lo - p) * iv;
+  tb = (hi - p) * iv;
+  return kv3(k_fmin(ta, tb), k_fmax(ta, tb), KF(0.0));
+}
+
 /* Closest point of a quadratic piece to the line (o, D): u in [0, 1] and the
  * squared distance, from the cubic d/du |P_perp(Q(u) - o)|^2 = 0. KX = u, KY = rho^2. */
 KNIT_FN kvec3 knit_quad_closest(KNIT_IN(KQuad) q, kvec3 o, kvec3 D) {
@@ -288,6 +303,15 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
   int g1 = KINT(k_floor((xmax + rr + xa) / KNIT_PIECE_LEN));
   int count = 0;
   int k, gp, i, j;
+  /* The cheap cull (knit_segment_box_entry against knit_piece_bounds_xy,
+   * grown by rr), taken apart by axis: the z slab is the same for every
+   * piece, the y slab depends on the row and the piece's place j in its
+   * cell, the x slab on the piece. Same values, same result, without
+   * recomputing the boxes and the z and y slabs for every piece. */
+  float oxl[8], oxh[8], oyl[8], oyh[8]; /* knit_piece_offsets_xy by j */
+  float uyl[8], uyh[8];                 /* y slab's u range by j, current row */
+  kvec3 uz;
+  float ul0, ul1;
   /* FIRST: candidates (row, piece, entry distance of their box) */
   float cand_s[KNIT_QUERY_MAX_CAND];
   int cand_k[KNIT_QUERY_MAX_CAND], cand_g[KNIT_QUERY_MAX_CAND];
@@ -299,16 +323,36 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
                            k_fmin(KZ(pa), KZ(pb)) <= -g.shell_top && k_fmax(KZ(pa), KZ(pb)) >= g.shell_top
                        ? 1 : 0;
   if (inside == 0) return best;
+  for (j = 0; j < 8; j++) {
+    KBox off = knit_piece_offsets_xy(g, j);
+    oxl[j] = KX(off.lo);
+    oxh[j] = KX(off.hi);
+    oyl[j] = KY(off.lo);
+    oyh[j] = KY(off.hi);
+    if (j == 0) uz = knit_slab_range(KZ(off.lo) - rr, KZ(off.hi) + rr, KZ(pa), KZ(inv));
+  }
+  ul0 = k_fmax(KF(0.0), KX(uz));
+  ul1 = k_fmin(KF(1.0), KY(uz));
+  if (ul0 > ul1) return best;
   for (k = k0; k <= k1; k++) {
     float last_t = -K_BIG, prev_t = -K_BIG;
     KRow rw = knit_row(g, k);
+    for (j = 0; j < 8; j++) {
+      kvec3 uy = knit_slab_range((rw.yk + oyl[j]) - rr, (rw.yk + oyh[j]) + rr, KY(pa), KY(inv));
+      uyl[j] = k_fmax(ul0, KX(uy));
+      uyh[j] = k_fmin(ul1, KY(uy));
+    }
     for (gp = g0; gp <= g1; gp++) {
-      float t, u;
+      float t, u, t0 = KFLT(gp) * K_PI_4;
+      int jp = gp & 7;
+      kvec3 ux;
       KnitLineHit h;
       KSpan sp;
       /* Cheap cull first (no pattern lookups), then the exact piece box. */
-      u = knit_segment_box_entry(pa, inv, knit_piece_bounds_xy(g, rw.yk, gp), rr);
-      if (u < KF(0.0)) continue;
+      if (uyl[jp] > uyh[jp]) continue;
+      ux = knit_slab_range((t0 + oxl[jp]) - rr, (t0 + K_PI_4 + oxh[jp]) + rr, KX(pa), KX(inv));
+      u = k_fmax(uyl[jp], KX(ux));
+      if (u > k_fmin(uyh[jp], KY(ux))) continue;
       if (mode == KNIT_QUERY_FIRST && skip_exact == 0 && ncand < KNIT_QUERY_MAX_CAND) {
         /* ordered below by this entry (a lower bound of the exact box's) */
         cand_s[ncand] = s_min + u * (s_max - s_min);

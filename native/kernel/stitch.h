@@ -363,15 +363,12 @@ KNIT_FN KBox knit_profile_piece_bounds(KNIT_IN(KnitGeom) g, int code, kvec3 sg, 
   return b;
 }
 
-/* Bounds of row k's curve over global piece gp in x and y only, without
- * looking at the pattern: x and y of knit and purl profiles do not depend on
- * the code (nor on a blend between them); slip-stitch floats lie on
- * y = y_k - h, x = t. z is bounded by the depth of the deepest profile. */
-KNIT_FN KBox knit_piece_bounds_xy(KNIT_IN(KnitGeom) g, float yk, int gp) {
+/* knit_piece_bounds_xy's box of a piece j (0..7) of a cell, relative to
+ * the piece's start t0 in x (its hi.x to t0 + pi/4) and to the row's centre
+ * y_k in y; z absolute. */
+KNIT_FN KBox knit_piece_offsets_xy(KNIT_IN(KnitGeom) g, int j) {
   KBox b;
-  int j = gp & 7;
   int q = j & 3;
-  float t0 = KFLT(gp) * K_PI_4;
   float zmax = g.has_floats != 0 ? g.float_depth : k_fabs(g.d);
   /* sin 2tau runs 0 -> 1 -> 0 -> -1 -> 0 over pieces q = 0..3 of a half
    * period; cos tau between the values at the piece's ends. */
@@ -385,8 +382,23 @@ KNIT_FN KBox knit_piece_bounds_xy(KNIT_IN(KnitGeom) g, float yk, int gp) {
     xhi = k_fmax(xhi, KF(0.0));
     ylo = -g.h;
   }
-  b.lo = kv3(t0 + xlo, yk + ylo, -zmax);
-  b.hi = kv3(t0 + K_PI_4 + xhi, yk + yhi, zmax);
+  b.lo = kv3(xlo, ylo, -zmax);
+  b.hi = kv3(xhi, yhi, zmax);
+  return b;
+}
+
+/* Bounds of row k's curve over global piece gp in x and y only, without
+ * looking at the pattern: x and y of knit and purl profiles do not depend on
+ * the code (nor on a blend between them); slip-stitch floats lie on
+ * y = y_k - h, x = t. z is bounded by the depth of the deepest profile.
+ * The box is the piece's start (t0, y_k) plus offsets that depend only on
+ * the piece's place j = gp mod 8 in its cell (knit_piece_offsets_xy). */
+KNIT_FN KBox knit_piece_bounds_xy(KNIT_IN(KnitGeom) g, float yk, int gp) {
+  KBox o = knit_piece_offsets_xy(g, gp & 7);
+  KBox b;
+  float t0 = KFLT(gp) * K_PI_4;
+  b.lo = kv3(t0 + KX(o.lo), yk + KY(o.lo), KZ(o.lo));
+  b.hi = kv3(t0 + K_PI_4 + KX(o.hi), yk + KY(o.hi), KZ(o.hi));
   return b;
 }
 

@@ -79,10 +79,18 @@ TEST(Stitch, PieceBoundsContainTheCurve) {
     for (int row = -2; row < 4; ++row)
       for (int gp = -16; gp < 80; ++gp) {
         k::KBox b = k::knit_piece_bounds(s.geom(), s.codes(), k::knit_row(s.geom(), row), gp);
+        // The line query's first cull: a box from the row and piece alone (no pattern).
+        k::KBox bxy = k::knit_piece_bounds_xy(s.geom(), k::knit_row(s.geom(), row).yk, gp);
         for (int i = 0; i <= 64; ++i) {
           double t = (gp + i / 64.0) * kPi / 4;
           CurvePoint c = yarn_curve_exact(pat, sp, row, t);
           const float tol = 1e-4f;
+          ASSERT_GE(c.p[0], bxy.lo.x - tol) << "row " << row << " piece " << gp;
+          ASSERT_LE(c.p[0], bxy.hi.x + tol) << "row " << row << " piece " << gp;
+          ASSERT_GE(c.p[1], bxy.lo.y - tol) << "row " << row << " piece " << gp;
+          ASSERT_LE(c.p[1], bxy.hi.y + tol) << "row " << row << " piece " << gp;
+          ASSERT_GE(c.p[2], bxy.lo.z - tol) << "row " << row << " piece " << gp;
+          ASSERT_LE(c.p[2], bxy.hi.z + tol) << "row " << row << " piece " << gp;
           ASSERT_GE(c.p[0], b.lo.x - tol) << "row " << row << " piece " << gp;
           ASSERT_LE(c.p[0], b.hi.x + tol) << "row " << row << " piece " << gp;
           ASSERT_GE(c.p[1], b.lo.y - tol);
