@@ -40,7 +40,7 @@ RenderResult render_image(const Scene& scene, const RenderSettings& settings) {
         const uint64_t pixel = static_cast<uint64_t>(y) * static_cast<uint64_t>(w) + static_cast<uint64_t>(x);
         double sr = 0, sg = 0, sb = 0;
         for (int s = 0; s < spp; ++s) {
-          Sampler sampler(settings.seed, pixel, static_cast<uint64_t>(s));
+          Sampler sampler(settings.seed, pixel, static_cast<uint64_t>(s), static_cast<uint32_t>(spp));
           const Vec2 j = sampler.get2d();
           const RayDifferential ray = camera.generate(static_cast<float>(x) + j.x, static_cast<float>(y) + j.y, diff_scale);
           Rgb l;
