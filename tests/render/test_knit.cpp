@@ -412,7 +412,10 @@ TEST(KnitDeterminism, SameSeedSameImageWithOneAndTwoThreads) {
   const std::string dir = test::test_dir();
   for (const char* mode : {"near_field", "multi_scale"}) {
     std::string s = strategies_scene("mis", mode);
-    s.replace(s.find("\"spp\": 256"), 10, "\"spp\": 4");
+    const std::string spp = "\"spp\": 1024";
+    const size_t at = s.find(spp);
+    ASSERT_NE(at, std::string::npos);
+    s.replace(at, spp.size(), "\"spp\": 4");
     const auto one = test::render_text(dir, s, 1);
     const auto two = test::render_text(dir, s, 2);
     ASSERT_EQ(one.image.pixels.size(), two.image.pixels.size());
