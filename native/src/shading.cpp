@@ -120,20 +120,20 @@ k::KnitCapm KnitMaterial::march(const BaseHit& hit, Vec3 ray_dir, const FramePro
 }
 
 k::KnitCapm KnitMaterial::march_from(const BaseHit& hit, const KnitShade& from, Vec3 dir_world,
-                                     const FrameProvider* frame) const {
+                                     const FrameProvider* frame, bool blocked_only) const {
   // Started a twentieth of the radius along the ray: the tube the point lies
   // on is then entered behind the start (its entry does not count), which
   // float rounding at pattern coordinates up to ~1e4 cannot undo; another
   // tube closer than that to the point is missed.
   const Vec3 d = k::kv3_normalize(k::kv3_to_local(dir_world, hit.t, hit.b, hit.n));
   const Vec3 p = k::kv3_madd(from.p_yarn, d, 0.05f * surface_.geom().r);
-  return march_state(hit, k::knit_capm_begin_at(p, d), dir_world, frame);
+  return march_state(hit, k::knit_capm_begin_at(p, d), dir_world, frame, blocked_only);
 }
 
 bool KnitMaterial::occluded_from(const BaseHit& hit, const KnitShade& from, Vec3 dir_world,
                                  const FrameProvider* frame) const {
   if (!from.in_shell || !params_.self_shadowing) return false;
-  return march_from(hit, from, dir_world, frame).state == KNIT_CAPM_HIT;
+  return march_from(hit, from, dir_world, frame, true).state == KNIT_CAPM_HIT;
 }
 
 KnitShade KnitMaterial::unshaded() const {
@@ -161,9 +161,9 @@ KnitShade KnitMaterial::shade_from(const BaseHit& hit, const KnitShade& from, Ve
 }
 
 k::KnitCapm KnitMaterial::march_state(const BaseHit& hit, const k::KnitCapm& start, Vec3 ray_dir,
-                                      const FrameProvider* frame) const {
+                                      const FrameProvider* frame, bool blocked_only) const {
   const float x = params_.uv_scale * hit.u, y = params_.uv_scale * hit.v;
-  if (frame) return surface_.march(start, ray_dir, frame, params_.capm_options);
+  if (frame) return surface_.march(start, ray_dir, frame, params_.capm_options, blocked_only);
   const float S = hit.pattern_per_world;
   const float kx = hit.kx / S, ky = hit.ky / S;
   const float kmax = std::max(std::abs(kx), std::abs(ky));

@@ -109,7 +109,7 @@ SurfaceHit KnitSurface::capm(float x, float y, Vec3 wi_local, const FrameProvide
 }
 
 k::KnitCapm KnitSurface::march(k::KnitCapm start, Vec3 ray_world, const FrameProvider* frame,
-                               const CapmOptions& opt) const {
+                               const CapmOptions& opt, bool blocked_only) const {
   static const FlatFrame flat_frame;
   const FrameProvider& fp = frame ? *frame : flat_frame;
   if (!(opt.max_steps >= 1) || !(opt.max_segment > 0) || !(opt.max_bend > 0))
@@ -132,7 +132,7 @@ k::KnitCapm KnitSurface::march(k::KnitCapm start, Vec3 ray_world, const FramePro
     }
     const k::KnitCapm before = st;
     st = k::knit_capm_step(geom_, codes(), colors(), st, seg, opt.max_steps, kappa.x, kappa.y);
-    if (st.state == KNIT_CAPM_HIT && !flat) {
+    if (st.state == KNIT_CAPM_HIT && !flat && !blocked_only) {
       const Vec3 m = k::knit_capm_hit_midpoint(before, st);
       fp.frame(m.x, m.y, t, b, n);
       st = k::knit_capm_correct(geom_, codes(), colors(), before, st, k::kv3_to_local(ray_world, t, b, n),

@@ -112,11 +112,12 @@ class KnitMaterial {
   k::KnitCapm march(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame) const;
   // March from `start` (pattern space) for a ray along ray_dir (world) on
   // the base of `hit`: the frame field or hit's curvature bends it.
+  // blocked_only: see KnitSurface::march.
   k::KnitCapm march_state(const BaseHit& hit, const k::KnitCapm& start, Vec3 ray_dir,
-                          const FrameProvider* frame) const;
+                          const FrameProvider* frame, bool blocked_only = false) const;
   // March from `from`'s yarn point along dir_world (see occluded_from).
   k::KnitCapm march_from(const BaseHit& hit, const KnitShade& from, Vec3 dir_world,
-                         const FrameProvider* frame) const;
+                         const FrameProvider* frame, bool blocked_only = false) const;
   // A shade with the material's unwidened specular lobes and no yarn yet.
   KnitShade unshaded() const;
   // Near-field shading at yarn hit h of a ray that met the base at `hit`.

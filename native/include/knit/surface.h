@@ -109,9 +109,12 @@ class KnitSurface {
   // The CAPM march from any start (k::knit_capm_start / begin_at), bending
   // the world-space ray `ray_world` (the direction it travels) with the
   // frames of `frame` (flat if null; its curvature() sets the metric and the
-  // segment length). Returns the final kernel state.
+  // segment length). Returns the final kernel state. blocked_only: the
+  // caller only asks whether the ray is blocked (a shadow ray), so a hit ends
+  // the march as found, without the midpoint corrector that places it
+  // (knit_capm_correct: one more line query per hit on a curved base).
   k::KnitCapm march(k::KnitCapm start, Vec3 ray_world, const FrameProvider* frame,
-                    const CapmOptions& opt = {}) const;
+                    const CapmOptions& opt = {}, bool blocked_only = false) const;
   SurfaceHit to_hit(const k::KnitCapm& st) const;
 
   // The kernel's view of this surface (for hosts that call the kernel directly).
