@@ -268,7 +268,7 @@ bool FootprintTable::class_counts(const KnitSurface& surface, const k::KFootprin
                                   std::array<double, kClasses>& counts) const {
   counts.fill(0);
   if (single_class_ >= 0) {
-    counts[size_t(single_class_)] = cell_count(f);
+    counts[size_t(single_class_)] = double(f.ncx) * f.ncy;
     return true;
   }
   if (prefix_.empty()) return false;

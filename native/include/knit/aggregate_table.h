@@ -94,9 +94,8 @@ class FootprintTable {
   static bool all_cells(const k::KFootprint& f) {
     return int64_t(f.ncx) * int64_t(f.ncy) <= KNIT_MS_MAX_POINTS;  // up to 1e5 x 1e5 cells: no int product
   }
-  static double cell_count(const k::KFootprint& f) { return all_cells(f) ? double(f.ncx) * f.ncy : double(f.n); }
   // The number of cells of each class for f without visiting them: all of
-  // them for a pattern of one class (cell_count), else from the per-row
+  // them for a pattern of one class, else from the per-row
   // prefix counts, a few additions per row of the box (at most one pass over
   // the pattern's rows for a box of any height) instead of a visit per cell;
   // false when there are no prefix counts (a pattern too large for them).
