@@ -198,10 +198,12 @@ KNIT_FN KnitCapm knit_capm_start(KNIT_IN(KnitGeom) g, float x, float y, kvec3 wi
 
 /* March st on a base of constant curvature (flat: kx = ky = 0) whose frame at
  * (x, y) sees the ray as d0: midpoint rule and hit corrector as in the host
- * loop (KnitSurface::capm). */
+ * loop (KnitSurface::march). blocked_only != 0: the caller only asks whether
+ * the ray is blocked (a shadow ray), so a hit ends the march as found,
+ * without the corrector that places it. */
 KNIT_FN KnitCapm knit_capm_march_curved(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
                                         KNIT_IN(KnitCapm) start, float x, float y, kvec3 d0, float kx, float ky,
-                                        float max_segment, int max_steps) {
+                                        float max_segment, int max_steps, int blocked_only) {
   KnitCapm st = start;
   int curved = (kx != KF(0.0) || ky != KF(0.0)) ? 1 : 0;
   int i;
@@ -213,7 +215,7 @@ KNIT_FN KnitCapm knit_capm_march_curved(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, cod
     }
     before = st;
     st = knit_capm_step(g, codes, colors, st, max_segment, max_steps, kx, ky);
-    if (curved != 0 && st.state == KNIT_CAPM_HIT) {
+    if (curved != 0 && st.state == KNIT_CAPM_HIT && blocked_only == 0) {
       kvec3 mh = knit_capm_hit_midpoint(before, st);
       st = knit_capm_correct(g, codes, colors, before, st,
                              knit_curved_frame_dir(d0, kx, ky, KX(mh) - x, KY(mh) - y), max_segment,
@@ -234,7 +236,7 @@ KNIT_FN KnitCapm knit_capm_curved(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), K
                                   float max_segment, int max_steps) {
   KnitCapm st = knit_capm_start(g, x, y, wi_local);
   return knit_capm_march_curved(g, codes, colors, st, x, y, kv3_neg(kv3_normalize(wi_local)), kx, ky,
-                                max_segment, max_steps);
+                                max_segment, max_steps, 0);
 }
 
 #endif /* KNIT_KERNEL_CAPM_H */

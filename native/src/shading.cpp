@@ -171,7 +171,7 @@ k::KnitCapm KnitMaterial::march_state(const BaseHit& hit, const k::KnitCapm& sta
   const float seg = kmax > 0 ? std::min(o.max_segment, o.max_bend / kmax) : o.max_segment;
   return k::knit_capm_march_curved(surface_.geom(), surface_.codes(), surface_.colors(), start, x, y,
                                    k::kv3_normalize(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n)), kx, ky, seg,
-                                   o.max_steps);
+                                   o.max_steps, blocked_only ? 1 : 0);
 }
 
 int KnitMaterial::footprint_points_for(Vec3 fx, Vec3 fy) const {

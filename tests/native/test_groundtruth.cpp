@@ -185,7 +185,7 @@ TEST(GroundTruth, KernelCurvedMarchMatchesHostFrameMarch) {
 
 // A shadow ray only asks whether it is blocked: its march skips the
 // midpoint corrector of a hit on a curved base (one line query less per
-// blocked ray). Rays from inside the shell in all directions, on a tight
+// blocked ray), with a frame field or with the kernel's constant curvature. Rays from inside the shell in all directions, on a tight
 // and a loose cylinder: blocked or not as the full march says.
 TEST(GroundTruth, BlockedOnlyMarchAgreesWithTheFullMarch) {
   using namespace knit;
@@ -194,7 +194,7 @@ TEST(GroundTruth, BlockedOnlyMarchAgreesWithTheFullMarch) {
   std::uniform_real_distribution<float> U(0, 1);
   for (const float R : {12.0f, 50.0f}) {
     CylinderFrame cyl(R);
-    int same = 0, blocked = 0;
+    int same = 0, blocked = 0, ksame = 0;
     const int n = 4000;
     for (int i = 0; i < n; ++i) {
       const float x = 40 * U(rng), y = 40 * U(rng), z = (2 * U(rng) - 1) * 0.9f * s.shell_top();
@@ -208,9 +208,19 @@ TEST(GroundTruth, BlockedOnlyMarchAgreesWithTheFullMarch) {
       const bool fast = s.march(start, ray_world, &cyl, CapmOptions{}, true).state == KNIT_CAPM_HIT;
       same += full == fast;
       blocked += full;
+      // The same for the kernel's march without a frame field (constant curvature 1/R along x).
+      const CapmOptions opt;
+      const float seg = std::min(opt.max_segment, opt.max_bend * R);
+      const bool kfull = k::knit_capm_march_curved(s.geom(), s.codes(), s.colors(), start, x, y, d, 1 / R, 0, seg,
+                                                   opt.max_steps, 0).state == KNIT_CAPM_HIT;
+      const bool kfast = k::knit_capm_march_curved(s.geom(), s.codes(), s.colors(), start, x, y, d, 1 / R, 0, seg,
+                                                   opt.max_steps, 1).state == KNIT_CAPM_HIT;
+      ksame += kfull == kfast;
     }
-    std::printf("[ march ] R = %.0f: blocked-only agrees on %d of %d rays (%d blocked)\n", R, same, n, blocked);
+    std::printf("[ march ] R = %.0f: blocked-only agrees on %d of %d rays (%d blocked), kernel march %d\n", R, same,
+                n, blocked, ksame);
     EXPECT_GE(same, n * 998 / 1000) << "R = " << R;
+    EXPECT_GE(ksame, n * 998 / 1000) << "kernel march, R = " << R;
     EXPECT_GT(blocked, n / 5) << "R = " << R;
   }
 }

@@ -112,7 +112,8 @@ class KnitMaterial {
   k::KnitCapm march(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame) const;
   // March from `start` (pattern space) for a ray along ray_dir (world) on
   // the base of `hit`: the frame field or hit's curvature bends it.
-  // blocked_only: see KnitSurface::march.
+  // blocked_only: see KnitSurface::march (and knit_capm_march_curved, the
+  // march without a frame field).
   k::KnitCapm march_state(const BaseHit& hit, const k::KnitCapm& start, Vec3 ray_dir,
                           const FrameProvider* frame, bool blocked_only = false) const;
   // March from `from`'s yarn point along dir_world (see occluded_from).
