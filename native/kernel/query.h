@@ -268,7 +268,7 @@ KNIT_FN KnitLineHit knit_crossing(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), K
  * stays farther than m from the line. */
 KNIT_FN float knit_piece_closest_t(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KSpan) sp, int gp,
                                    kvec3 o, kvec3 D, float m) {
-  KQuad q = knit_span_piece_quad(g, codes, sp, gp);
+  KQuad q = knit_span_piece_quad(g, sp, gp);
   kvec3 cu = knit_quad_closest(q, o, D);
   if (KY(cu) > m * m) return K_BIG;
   return knit_newton_closest(g, codes, sp, o, D, q.t0 + KX(cu) * KNIT_PIECE_LEN, KNIT_NEWTON_CLOSEST);
@@ -322,6 +322,11 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
   int skip_exact = g.has_floats == 0 && KX(inv) == KF(0.0) && KY(inv) == KF(0.0) &&
                            k_fmin(KZ(pa), KZ(pb)) <= -g.shell_top && k_fmax(KZ(pa), KZ(pb)) >= g.shell_top
                        ? 1 : 0;
+  /* Vertical lines through knit and purl rows test the distance in x and y
+   * before looking at the pattern (FIRST queries order their pieces first). */
+  int xy_first = g.has_floats == 0 && KX(inv) == KF(0.0) && KY(inv) == KF(0.0) &&
+                         (mode != KNIT_QUERY_FIRST || skip_exact != 0)
+                     ? 1 : 0;
   if (inside == 0) return best;
   for (j = 0; j < 8; j++) {
     KBox off = knit_piece_offsets_xy(g, j);
@@ -343,7 +348,7 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
       uyh[j] = k_fmin(ul1, KY(uy));
     }
     for (gp = g0; gp <= g1; gp++) {
-      float t, u, t0 = KFLT(gp) * K_PI_4;
+      float t, u, t0 = KFLT(gp) * K_PI_4, t_start = KF(0.0);
       int jp = gp & 7;
       kvec3 ux;
       KnitLineHit h;
@@ -361,6 +366,16 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
         ncand = ncand + 1;
         continue;
       }
+      if (xy_first != 0) {
+        /* A vertical line's distance to a knit or purl yarn lies in x and
+         * y, which do not depend on the codes: the interpolant's closest
+         * point, without looking at the pattern (the same as
+         * knit_piece_closest_t's up to rounding in blended pieces). */
+        KQuad qx = knit_loop_piece_quad_xy(g, rw.yk, gp);
+        kvec3 cu = knit_quad_closest(qx, o, D);
+        if (KY(cu) > m * m) continue;
+        t_start = qx.t0 + KX(cu) * KNIT_PIECE_LEN;
+      }
       sp = knit_span(g, codes, rw, knit_piece_column(gp));
       if (skip_exact == 0) {
         u = knit_segment_box_entry(pa, inv, knit_span_piece_bounds(g, sp, gp), rr);
@@ -368,7 +383,8 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
       }
       /* A crossing found again from the neighbouring piece has the same
        * closest point: counted once. */
-      t = knit_piece_closest_t(g, codes, sp, gp, o, D, m);
+      t = xy_first != 0 ? knit_newton_closest(g, codes, sp, o, D, t_start, KNIT_NEWTON_CLOSEST)
+                        : knit_piece_closest_t(g, codes, sp, gp, o, D, m);
       if (t == K_BIG || k_fabs(t - last_t) < KF(0.1) || k_fabs(t - prev_t) < KF(0.1)) continue;
       if (mode == KNIT_QUERY_COUNT) {
         KCurve cc = knit_span_curve_at(g, codes, sp, t);

@@ -310,15 +310,23 @@ KNIT_FN float knit_cos_pi8(int m) {
 }
 KNIT_FN float knit_sin_pi8(int m) { return knit_cos_pi8(m - 4); }
 
+/* x and y of node m (tau = m pi/8 - pi) of a knit or purl cell centred at
+ * (tc, yk), which do not depend on the code; KZ = cos tau, for the depth. */
+KNIT_FN kvec3 knit_loop_node_xy(KNIT_IN(KnitGeom) g, int m, float tc, float yk) {
+  float tau = KFLT(m) * (K_PI / KF(8.0)) - K_PI;
+  /* tau = m pi/8 - pi: cos tau = -cos(m pi/8); 2 tau = m pi/4 - 2 pi */
+  float c1 = -knit_cos_pi8(m);
+  return kv3(tc + tau + g.a * knit_sin_pi8(2 * m), yk + g.h * c1, c1);
+}
+
 /* Position on the unblended profile at tau = m pi/8 - pi (node m of a cell). */
 KNIT_FN kvec3 knit_profile_node(KNIT_IN(KnitGeom) g, int code, kvec3 sg, int m, float tc, float yk) {
-  float tau = KFLT(m) * (K_PI / KF(8.0)) - K_PI;
   if (knit_code_is_loop(code)) {
-    /* tau = m pi/8 - pi: cos tau = -cos(m pi/8); 2 tau = m pi/4 - 2 pi */
-    float c1 = -knit_cos_pi8(m);
-    return kv3(tc + tau + g.a * knit_sin_pi8(2 * m), yk + g.h * c1, g.d * KX(knit_depth_poly(sg, c1)));
+    kvec3 n = knit_loop_node_xy(g, m, tc, yk);
+    return kv3(KX(n), KY(n), g.d * KX(knit_depth_poly(sg, KZ(n))));
   }
-  return kv3(tc + tau, yk - g.h, code == KNIT_CODE_FRONT ? g.float_depth : -g.float_depth);
+  return kv3(tc + (KFLT(m) * (K_PI / KF(8.0)) - K_PI), yk - g.h,
+             code == KNIT_CODE_FRONT ? g.float_depth : -g.float_depth);
 }
 
 /* An axis-aligned box. */
@@ -453,7 +461,7 @@ KNIT_FN KQuad knit_quad_from_nodes(kvec3 f0, kvec3 f1, kvec3 f2, float t0) {
 }
 
 /* Interpolant of span sp's row over global piece gp of its centre column. */
-KNIT_FN KQuad knit_span_piece_quad(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KSpan) sp, int gp) {
+KNIT_FN KQuad knit_span_piece_quad(KNIT_IN(KnitGeom) g, KNIT_IN(KSpan) sp, int gp) {
   int j = gp - 8 * sp.c;
   float t0 = KFLT(gp) * K_PI_4;
   int dn = knit_piece_neighbour(j);
@@ -464,17 +472,53 @@ KNIT_FN KQuad knit_span_piece_quad(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), 
                                 knit_profile_node(g, sp.mid.code, sp.mid.sg, 2 * j + 2, tc, sp.rw.yk), t0);
   }
   {
-    /* Blended piece: interpolate the exact (blended) curve. */
-    KCurve n0 = knit_span_curve_at(g, codes, sp, t0);
-    KCurve n1 = knit_span_curve_at(g, codes, sp, t0 + KF(0.5) * K_PI_4);
-    KCurve n2 = knit_span_curve_at(g, codes, sp, t0 + K_PI_4);
-    return knit_quad_from_nodes(n0.p, n1.p, n2.p, t0);
+    /* Blended piece: interpolate the blended curve at the piece's nodes,
+     * lo + w (hi - lo) with lo, hi the profiles left and right of the
+     * boundary (knit_blend_curve). The nodes are nodes of both profiles (the
+     * neighbour's 16 further along its own phase), and the smoothstep's
+     * weight there is exact in float: x = (t - tb + pi/4) / (pi/2) is
+     * 0, 1/4, 1/2 on piece 7 and 1/2, 3/4, 1 on piece 0, where
+     * w(x) = x^3 (10 - 15 x + 6 x^2) is 0, 53/512, 1/2 and 1/2, 459/512, 1.
+     * Same nodes as evaluating the blended curve there, without a sine or
+     * a cosine. */
+    float tc = K_2PI * KFLT(sp.c) + K_PI;
+    float ntc = tc + KFLT(dn) * K_2PI;
+    KCell ncl = knit_span_cell(sp, sp.c + dn);
+    int m0 = 2 * j, nm0 = 2 * j - 16 * dn; /* node of the piece's start, own and neighbour's */
+    float w0 = dn > 0 ? KF(0.0) : KF(0.5);
+    float w1 = dn > 0 ? KF(0.103515625) : KF(0.896484375);
+    float w2 = dn > 0 ? KF(0.5) : KF(1.0);
+    kvec3 s0 = knit_profile_node(g, sp.mid.code, sp.mid.sg, m0, tc, sp.rw.yk);
+    kvec3 s1 = knit_profile_node(g, sp.mid.code, sp.mid.sg, m0 + 1, tc, sp.rw.yk);
+    kvec3 s2 = knit_profile_node(g, sp.mid.code, sp.mid.sg, m0 + 2, tc, sp.rw.yk);
+    kvec3 o0 = knit_profile_node(g, ncl.code, ncl.sg, nm0, ntc, sp.rw.yk);
+    kvec3 o1 = knit_profile_node(g, ncl.code, ncl.sg, nm0 + 1, ntc, sp.rw.yk);
+    kvec3 o2 = knit_profile_node(g, ncl.code, ncl.sg, nm0 + 2, ntc, sp.rw.yk);
+    if (dn > 0) { /* the centre cell is left of the boundary */
+      return knit_quad_from_nodes(kv3_madd(s0, kv3_sub(o0, s0), w0), kv3_madd(s1, kv3_sub(o1, s1), w1),
+                                  kv3_madd(s2, kv3_sub(o2, s2), w2), t0);
+    }
+    return knit_quad_from_nodes(kv3_madd(o0, kv3_sub(s0, o0), w0), kv3_madd(o1, kv3_sub(s1, o1), w1),
+                                kv3_madd(o2, kv3_sub(s2, o2), w2), t0);
   }
+}
+
+/* x and y of the interpolant of a row of knit and purl cells over global
+ * piece gp (z = 0): the same as knit_span_piece_quad's for any codes (a
+ * blend between loops changes z only), without looking at the pattern. */
+KNIT_FN KQuad knit_loop_piece_quad_xy(KNIT_IN(KnitGeom) g, float yk, int gp) {
+  int j = gp & 7;
+  float tc = K_2PI * KFLT(knit_piece_column(gp)) + K_PI;
+  kvec3 n0 = knit_loop_node_xy(g, 2 * j, tc, yk);
+  kvec3 n1 = knit_loop_node_xy(g, 2 * j + 1, tc, yk);
+  kvec3 n2 = knit_loop_node_xy(g, 2 * j + 2, tc, yk);
+  return knit_quad_from_nodes(kv3(KX(n0), KY(n0), KF(0.0)), kv3(KX(n1), KY(n1), KF(0.0)),
+                              kv3(KX(n2), KY(n2), KF(0.0)), KFLT(gp) * K_PI_4);
 }
 
 /* The same for row rw (any global piece). */
 KNIT_FN KQuad knit_piece_quad(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KRow) rw, int gp) {
-  return knit_span_piece_quad(g, codes, knit_span(g, codes, rw, knit_piece_column(gp)), gp);
+  return knit_span_piece_quad(g, knit_span(g, codes, rw, knit_piece_column(gp)), gp);
 }
 
 KNIT_FN kvec3 knit_quad_eval(KNIT_IN(KQuad) q, float x) {
