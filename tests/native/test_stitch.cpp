@@ -113,6 +113,15 @@ TEST(Stitch, QuadraticInterpolantErrorWithinBound) {
       for (int gp = 0; gp < 64; ++gp) {
         k::KQuad q = k::knit_piece_quad(s.geom(), s.codes(), k::knit_row(s.geom(), row), gp);
         const bool blend = (gp % 8 == 0 || gp % 8 == 7);
+        // It interpolates: through the exact curve at its three nodes (a
+        // blended piece's nodes are built from both profiles' nodes).
+        for (int i = 0; i <= 2; ++i) {
+          CurvePoint c = yarn_curve_exact(pat, sp, row, (gp + i / 2.0) * kPi / 4);
+          k::kvec3 a = k::knit_quad_eval(q, i / 2.0f);
+          ASSERT_NEAR(a.x, c.p[0], 2e-5 * (1 + std::abs(c.p[0]))) << "row " << row << " piece " << gp << " node " << i;
+          ASSERT_NEAR(a.y, c.p[1], 2e-5 * (1 + std::abs(c.p[1]))) << "row " << row << " piece " << gp << " node " << i;
+          ASSERT_NEAR(a.z, c.p[2], 2e-5 * (1 + std::abs(c.p[2]))) << "row " << row << " piece " << gp << " node " << i;
+        }
         for (int i = 0; i <= 200; ++i) {
           const double u = i / 200.0;
           CurvePoint c = yarn_curve_exact(pat, sp, row, (gp + u) * kPi / 4);
@@ -128,6 +137,33 @@ TEST(Stitch, QuadraticInterpolantErrorWithinBound) {
                 sp.to_string().c_str(), worst[0], worst[1], worst[2], worst_plain, worst_blend, bound);
     EXPECT_LE(worst_plain, bound / 2 + 1e-4) << "plain-piece error exceeds the analytic bound";
     EXPECT_LE(worst_blend, bound) << "blend-piece error exceeds the margin used by the query";
+  }
+}
+
+// Vertical queries through knit and purl rows reject pieces on the x, y
+// interpolant, built without the pattern: it must be the full interpolant's
+// x and y, blended pieces included, for every mix of knit and purl.
+TEST(Stitch, LoopInterpolantXYIsTheFullInterpolantsXY) {
+  Pattern pat = Pattern::from_rows({{0, 1, 1, 0, 0, 0, 1, 0}, {1, 0, 0, 1, 1, 0, 0, 1}, {0, 0, 1, 1, 0, 1, 0, 1}});
+  for (StitchParams sp : {StitchParams{}, StitchParams{1.25f, 3.0f, -0.6f, 0.4f}}) {
+    KnitSurface s = make(pat, sp);
+    int blended = 0;
+    for (int row = -3; row < 6; ++row)
+      for (int gp = -16; gp < 80; ++gp) {
+        const k::KRow rw = k::knit_row(s.geom(), row);
+        const k::KQuad q = k::knit_piece_quad(s.geom(), s.codes(), rw, gp);
+        const k::KQuad x = k::knit_loop_piece_quad_xy(s.geom(), rw.yk, gp);
+        const k::KSpan span = k::knit_span(s.geom(), s.codes(), rw, k::knit_piece_column(gp));
+        const int dn = k::knit_piece_neighbour(gp - 8 * span.c);
+        if (dn != 0 && !k::knit_same_profile(span.mid, k::knit_span_cell(span, span.c + dn))) ++blended;
+        ASSERT_EQ(x.t0, q.t0);
+        for (const auto& [a, b] : {std::pair{x.q0, q.q0}, std::pair{x.q1, q.q1}, std::pair{x.q2, q.q2}}) {
+          ASSERT_NEAR(a.x, b.x, 1e-5f * (1 + std::abs(b.x))) << "row " << row << " piece " << gp;
+          ASSERT_NEAR(a.y, b.y, 1e-5f * (1 + std::abs(b.y))) << "row " << row << " piece " << gp;
+          ASSERT_EQ(a.z, 0.0f);
+        }
+      }
+    EXPECT_GT(blended, 100);  // the blends were exercised
   }
 }
 
