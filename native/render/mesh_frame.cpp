@@ -83,15 +83,32 @@ size_t MeshFrame::memory_bytes() const {
   return b;
 }
 
-knit::Vec3 MeshFrame::curvature(float x, float y) const {
-  if (!mesh_) return knit::k::kv3(0, 0, 0);
-  const Vec2 uv{x / uv_scale_, y / uv_scale_};
-  float b1 = 0, b2 = 0;
+int64_t MeshFrame::triangle_at(Vec2 uv, float& b1, float& b2, bool& inside, int64_t* hint) const {
+  // A march's lookups mostly stay in one triangle: try the last one first.
+  if (hint && *hint >= 0 && grid_->barycentrics(static_cast<size_t>(*hint), uv, b1, b2)) {
+    inside = true;
+    return *hint;
+  }
   int64_t tri = grid_->locate(uv, b1, b2);
-  if (tri < 0) tri = grid_->nearest(uv, b1, b2);
+  inside = tri >= 0;
+  if (inside && hint) *hint = tri;
+  if (!inside) tri = grid_->nearest(uv, b1, b2);
+  return tri;
+}
+
+knit::Vec3 MeshFrame::curvature_near(float x, float y, int64_t& hint) const {
+  if (!mesh_) return knit::k::kv3(0, 0, 0);
+  float b1 = 0, b2 = 0;
+  bool inside = false;
+  const int64_t tri = triangle_at({x / uv_scale_, y / uv_scale_}, b1, b2, inside, &hint);
   if (tri < 0) return knit::k::kv3(0, 0, 0);
   const Vec2 k = curvature_[static_cast<size_t>(tri)];
   return knit::k::kv3(k.x, k.y, 0);
+}
+
+knit::Vec3 MeshFrame::curvature(float x, float y) const {
+  int64_t hint = -1;
+  return curvature_near(x, y, hint);
 }
 
 MeshFrame::~MeshFrame() = default;
@@ -146,12 +163,11 @@ std::unique_ptr<MeshFrame> MeshFrame::from_baked(const std::string& path, float 
   return f;
 }
 
-bool MeshFrame::lookup(Vec2 uv, Frame& f) const {
+bool MeshFrame::lookup(Vec2 uv, Frame& f, int64_t* hint) const {
   if (mesh_) {
     float b1 = 0, b2 = 0;
-    int64_t tri = grid_->locate(uv, b1, b2);
-    const bool inside = tri >= 0;
-    if (!inside) tri = grid_->nearest(uv, b1, b2);
+    bool inside = false;
+    const int64_t tri = triangle_at(uv, b1, b2, inside, hint);
     f = interpolate_frame(*mesh_, static_cast<size_t>(tri), b1, b2);
     return inside;
   }
@@ -199,8 +215,13 @@ bool MeshFrame::lookup(Vec2 uv, Frame& f) const {
 }
 
 void MeshFrame::frame(float x, float y, knit::Vec3& t, knit::Vec3& b, knit::Vec3& n) const {
+  int64_t hint = -1;
+  frame_near(x, y, hint, t, b, n);
+}
+
+void MeshFrame::frame_near(float x, float y, int64_t& hint, knit::Vec3& t, knit::Vec3& b, knit::Vec3& n) const {
   Frame f;
-  lookup({x / uv_scale_, y / uv_scale_}, f);
+  lookup({x / uv_scale_, y / uv_scale_}, f, &hint);
   t = knit::k::kv3(f.t.x, f.t.y, f.t.z);
   b = knit::k::kv3(f.b.x, f.b.y, f.b.z);
   n = knit::k::kv3(f.n.x, f.n.y, f.n.z);

@@ -32,10 +32,15 @@ class MeshFrame final : public knit::FrameProvider {
   // triangle under (x, y): constant per triangle (uv_derivatives). Baked
   // frames: 0 (unknown).
   knit::Vec3 curvature(float x, float y) const override;
+  // The same, looking first in the triangle of the last lookup made with
+  // `hint` (exact mode; a baked image ignores it).
+  void frame_near(float x, float y, int64_t& hint, knit::Vec3& t, knit::Vec3& b, knit::Vec3& n) const override;
+  knit::Vec3 curvature_near(float x, float y, int64_t& hint) const override;
 
   // The same in UV, reporting whether uv lies inside a triangle (exact mode)
   // or inside a covered texel (baked mode).
-  bool lookup(Vec2 uv, Frame& f) const;
+  // `hint` as for frame_near (may be null).
+  bool lookup(Vec2 uv, Frame& f, int64_t* hint = nullptr) const;
 
   float uv_scale() const { return uv_scale_; }
   // Bytes held besides the mesh: the UV grid and per-triangle tables, or the baked image.
@@ -44,6 +49,9 @@ class MeshFrame final : public knit::FrameProvider {
 
  private:
   MeshFrame() = default;
+  // Exact mode: the triangle under uv (inside = true) or the nearest one,
+  // trying *hint first and keeping the triangle found in it.
+  int64_t triangle_at(Vec2 uv, float& b1, float& b2, bool& inside, int64_t* hint) const;
   struct Baked;
   std::shared_ptr<const TriangleMesh> mesh_;
   std::unique_ptr<UvTriangleGrid> grid_;

@@ -26,10 +26,12 @@ class UvTriangleGrid {
   Vec2 uv_max() const { return hi_; }
   size_t num_triangles() const { return tri_count_; }
   size_t memory_bytes() const { return (cell_start_.size() + cell_tris_.size()) * sizeof(uint32_t); }
+  // Whether triangle `tri` (one locate() can return) contains `uv`, the
+  // test locate() makes, with its barycentrics of vertices 1 and 2.
+  bool barycentrics(size_t tri, Vec2 uv, float& b1, float& b2) const;
 
  private:
   void cell_of(Vec2 uv, int& cx, int& cy) const;
-  bool barycentrics(size_t tri, Vec2 uv, float& b1, float& b2) const;
 
   const TriangleMesh& mesh_;
   Vec2 lo_, hi_;

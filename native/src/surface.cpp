@@ -114,32 +114,33 @@ k::KnitCapm KnitSurface::march(k::KnitCapm start, Vec3 ray_world, const FramePro
   const FrameProvider& fp = frame ? *frame : flat_frame;
   if (!(opt.max_steps >= 1) || !(opt.max_segment > 0) || !(opt.max_bend > 0))
     throw std::invalid_argument("CapmOptions: max_steps must be >= 1, max_segment and max_bend > 0");
-  const Vec3 kappa = fp.curvature(start.p.x, start.p.y);
+  int64_t hint = -1;  // the march's lookups stay close together
+  const Vec3 kappa = fp.curvature_near(start.p.x, start.p.y, hint);
   const float kmax = std::max(std::abs(kappa.x), std::abs(kappa.y));
   const float seg = kmax > 0 ? std::min(opt.max_segment, opt.max_bend / kmax) : opt.max_segment;
   const bool flat = frame == nullptr || dynamic_cast<const FlatFrame*>(frame) != nullptr;
   Vec3 t, b, n;
   k::KnitCapm st = start;
   if (!flat) {
-    fp.frame(st.p.x, st.p.y, t, b, n);
+    fp.frame_near(st.p.x, st.p.y, hint, t, b, n);
     st = k::knit_capm_aim(st, k::kv3_to_local(ray_world, t, b, n));
   }
   while (st.state == KNIT_CAPM_MARCHING) {
     if (!flat) {  // midpoint rule: aim the segment with the frame at its middle
       const Vec3 m = k::knit_capm_midpoint(geom_, st, seg);
-      fp.frame(m.x, m.y, t, b, n);
+      fp.frame_near(m.x, m.y, hint, t, b, n);
       st = k::knit_capm_aim(st, k::kv3_to_local(ray_world, t, b, n));
     }
     const k::KnitCapm before = st;
     st = k::knit_capm_step(geom_, codes(), colors(), st, seg, opt.max_steps, kappa.x, kappa.y);
     if (st.state == KNIT_CAPM_HIT && !flat && !blocked_only) {
       const Vec3 m = k::knit_capm_hit_midpoint(before, st);
-      fp.frame(m.x, m.y, t, b, n);
+      fp.frame_near(m.x, m.y, hint, t, b, n);
       st = k::knit_capm_correct(geom_, codes(), colors(), before, st, k::kv3_to_local(ray_world, t, b, n),
                                 seg, kappa.x, kappa.y);
     }
     if (st.state != KNIT_CAPM_MARCHING || flat) continue;
-    fp.frame(st.p.x, st.p.y, t, b, n);
+    fp.frame_near(st.p.x, st.p.y, hint, t, b, n);
     st = k::knit_capm_bend(geom_, st, k::kv3_to_local(ray_world, t, b, n));
   }
   return st;

@@ -7,6 +7,8 @@
 // x = uv_scale * u, y = uv_scale * v.
 #pragma once
 
+#include <cstdint>
+
 #include "knit/kernel.h"
 
 namespace knit {
@@ -22,6 +24,17 @@ class FrameProvider {
   // Normal curvature along x and y (1/pattern units, > 0 convex) for CAPM's
   // metric correction and segment length; {0, 0, 0} when unknown.
   virtual Vec3 curvature(float /*x*/, float /*y*/) const { return {0, 0, 0}; }
+
+  // The same for a caller that looks up many points near each other (a CAPM
+  // march): `hint` is the caller's, -1 at first, and a provider may keep in
+  // it where the last point was found (a mesh triangle) and look there
+  // first. The result may differ from frame()'s only where the point lies on
+  // the border of two places within rounding; it depends on the sequence of
+  // lookups made with that hint, never on other threads.
+  virtual void frame_near(float x, float y, int64_t& /*hint*/, Vec3& t, Vec3& b, Vec3& n) const {
+    frame(x, y, t, b, n);
+  }
+  virtual Vec3 curvature_near(float x, float y, int64_t& /*hint*/) const { return curvature(x, y); }
 };
 
 }  // namespace knit
