@@ -81,6 +81,40 @@ TEST(MeshFrame, OutsideTheUvChartsUsesTheNearestTriangle) {
   EXPECT_NEAR(fr.n.x, 1.0f, 1e-3f);
 }
 
+// A march's lookups with one hint: the same frames and curvatures as
+// lookups without, along a wandering path that stays in triangles, leaves
+// them and leaves the UV charts (where the nearest triangle answers).
+TEST(MeshFrame, HintedLookupsMatchUnhintedOnes) {
+  auto mesh = std::make_shared<const TriangleMesh>(load_mesh(test::mesh("half_cylinder.obj")));
+  const float uv_scale = 20.0f;
+  const MeshFrame f(mesh, uv_scale);
+  int64_t hint = -1;
+  std::set<int64_t> hints;
+  float x = 0.3f, y = 0.2f, dx = 1.7f, dy = 0.9f;
+  for (int i = 0; i < 4000; ++i) {
+    // Straight runs (a march) that turn every 16 steps, bouncing off the
+    // walls of [-5, 68] x [-5, 45], the charts' [0, 62.8] x [0, 40] grown.
+    if (i % 16 == 0) {
+      dx = 2.5f * std::sin(1.7f * i + 0.3f);
+      dy = 2.5f * std::cos(2.9f * i);
+    }
+    x += dx;
+    y += dy;
+    if (x < -5 || x > 68) dx = -dx;
+    if (y < -5 || y > 45) dy = -dy;
+    knit::Vec3 t0, b0, n0, t1, b1, n1;
+    f.frame(x, y, t0, b0, n0);
+    f.frame_near(x, y, hint, t1, b1, n1);
+    ASSERT_LT(length(v3(t1) - v3(t0)) + length(v3(b1) - v3(b0)) + length(v3(n1) - v3(n0)), 1e-5f)
+        << "at (" << x << ", " << y << ") step " << i;
+    const knit::Vec3 k0 = f.curvature(x, y), k1 = f.curvature_near(x, y, hint);
+    ASSERT_NEAR(k1.x, k0.x, 1e-6f);
+    ASSERT_NEAR(k1.y, k0.y, 1e-6f);
+    hints.insert(hint);
+  }
+  EXPECT_GT(hints.size(), 50u);  // the hint followed the path across triangles
+}
+
 TEST(MeshFrame, MirroredUvsGiveABitangentAlongPlusV) {
   const std::string dir = test::test_dir();
   const std::string obj = test::write_file(dir, "mirror.obj",
