@@ -134,6 +134,20 @@ KNIT_FN kvec3 knit_quad_closest(KNIT_IN(KQuad) q, kvec3 o, kvec3 D) {
   return kv3(best_u, best, KF(0.0));
 }
 
+/* A lower bound of the distance in x and y from (px, py) to the
+ * interpolant q over u in [0, 1] (z ignored): the distance to its chord
+ * q0 + u (q1 + q2) less |q2| / 4, the most Q(u) strays from the chord
+ * (Q - chord = q2 (u^2 - u)). A few operations against the cubic of
+ * knit_quad_closest, for pieces a vertical line passes far from. */
+KNIT_FN float knit_quad_xy_distance_bound(KNIT_IN(KQuad) q, float px, float py) {
+  float cx = KX(q.q1) + KX(q.q2), cy = KY(q.q1) + KY(q.q2);
+  float ax = px - KX(q.q0), ay = py - KY(q.q0);
+  float l2 = cx * cx + cy * cy;
+  float u = l2 > KF(0.0) ? k_clampf((ax * cx + ay * cy) / l2, KF(0.0), KF(1.0)) : KF(0.0);
+  float dx = ax - u * cx, dy = ay - u * cy;
+  return k_sqrt(dx * dx + dy * dy) - KF(0.25) * k_sqrt(KX(q.q2) * KX(q.q2) + KY(q.q2) * KY(q.q2));
+}
+
 /* Distance geometry of curve point cv relative to the line (o, D). */
 KNIT_STRUCT(KLineRel)
   float s;     /* (Y - o).D, position of the foot point along the line */
@@ -372,7 +386,10 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
          * point, without looking at the pattern (the same as
          * knit_piece_closest_t's up to rounding in blended pieces). */
         KQuad qx = knit_loop_piece_quad_xy(g, rw.yk, gp);
-        kvec3 cu = knit_quad_closest(qx, o, D);
+        kvec3 cu;
+        /* (with a margin, so that rounding never drops a piece the cubic keeps) */
+        if (knit_quad_xy_distance_bound(qx, KX(o), KY(o)) > m * KF(1.001) + KF(1.0e-4)) continue;
+        cu = knit_quad_closest(qx, o, D);
         if (KY(cu) > m * m) continue;
         t_start = qx.t0 + KX(cu) * KNIT_PIECE_LEN;
       }

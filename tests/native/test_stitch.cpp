@@ -167,6 +167,37 @@ TEST(Stitch, LoopInterpolantXYIsTheFullInterpolantsXY) {
   }
 }
 
+// The chord bound that lets vertical queries skip the cubic: never above
+// the interpolant's true distance in x and y (double precision, 2001
+// points), and close enough to reject most far pieces.
+TEST(Stitch, QuadDistanceBoundIsALowerBound) {
+  KnitSurface s = make(test::seed());
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> U(0.0f, 1.0f);
+  int far = 0, rejected = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const int row = static_cast<int>(U(rng) * 12) - 4, gp = static_cast<int>(U(rng) * 96) - 16;
+    const k::KRow rw = k::knit_row(s.geom(), row);
+    const k::KQuad q = k::knit_loop_piece_quad_xy(s.geom(), rw.yk, gp);
+    const float px = q.t0 + (U(rng) * 2 - 0.5f) * 4, py = rw.yk + (U(rng) * 2 - 1) * 6;
+    double best = 1e30;
+    for (int j = 0; j <= 2000; ++j) {
+      const double u = j / 2000.0;
+      const double x = q.q0.x + (q.q1.x + double(q.q2.x) * u) * u, y = q.q0.y + (q.q1.y + double(q.q2.y) * u) * u;
+      best = std::min(best, std::hypot(x - px, y - py));
+    }
+    const float bound = k::knit_quad_xy_distance_bound(q, px, py);
+    ASSERT_LE(bound, best + 1e-4) << "row " << row << " piece " << gp << " at (" << px << ", " << py << ")";
+    if (best > 1.5) {
+      ++far;
+      if (bound > 1.0) ++rejected;
+    }
+  }
+  std::printf("[ bound ] pieces farther than 1.5: %d, bound over 1.0 for %d (%.0f%%)\n", far, rejected,
+              100.0 * rejected / far);
+  EXPECT_GT(rejected, far * 3 / 4);
+}
+
 TEST(Stitch, ShellTopBoundsEveryTube) {
   for (const Pattern& pat : {test::stockinette(), test::slip_floats(), test::pyramid16()}) {
     KnitSurface s = make(pat);
