@@ -56,18 +56,29 @@ double compute_clearance(float a, float h, float d) {
         const double cr = std::sqrt(cx * cx + cy * cy + cz * cz);
         if (cr > 0) min_rc = std::min(min_rc, sp3 / cr);
       }
+    // Points of each row in order of x: a pair farther apart in x than the
+    // best distance so far cannot improve it, so only a window is visited
+    // (the same minimum as comparing every pair).
+    std::vector<std::vector<P3>> by_x = rows;
+    for (auto& r : by_x) std::sort(r.begin(), r.end(), [](const P3& p, const P3& q) { return p[0] < q[0]; });
     for (int k = 0; k < 4; ++k) {
       const auto& R = rows[size_t(k)];
       auto D = [&](int i, int j) { return dist(R[size_t(i)], R[size_t(j)]); };
       for (int i = 1; i + 1 < n; ++i)
         for (int j = i + gap; j + 1 < n; ++j) {
+          if (std::abs(R[size_t(i)][0] - R[size_t(j)][0]) >= best) continue;  // then D(i, j) >= best
           const double v = D(i, j);
           if (v < best && v <= D(i - 1, j) && v <= D(i + 1, j) && v <= D(i, j - 1) && v <= D(i, j + 1))
             best = v;
         }
-      for (int k2 = k + 1; k2 < 4 && k2 <= k + 2; ++k2)
-        for (const P3& p : R)
-          for (const P3& q : rows[size_t(k2)]) best = std::min(best, dist(p, q));
+      for (int k2 = k + 1; k2 < 4 && k2 <= k + 2; ++k2) {
+        const auto& Q = by_x[size_t(k2)];
+        for (const P3& p : R) {
+          auto it = std::lower_bound(Q.begin(), Q.end(), p[0] - best,
+                                     [](const P3& q, double x) { return q[0] < x; });
+          for (; it != Q.end() && (*it)[0] <= p[0] + best; ++it) best = std::min(best, dist(p, *it));
+        }
+      }
     }
   }
   return std::min(best, 2 * min_rc);
