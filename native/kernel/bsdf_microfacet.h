@@ -259,12 +259,15 @@ KNIT_FN KBsdfSample bsdf_mf_transmit_sample(KNIT_IN(KMicrofacet) m, kvec3 wo, fl
 KNIT_STRUCT(KLeanRoughness)
   float alpha_u; /* GGX roughness along the principal direction u */
   float alpha_v; /* GGX roughness along v, perpendicular to u in the tangent plane */
-  float angle;   /* u = cos(angle) x + sin(angle) y (radians, in (-pi/2, pi/2]) */
+  float cos_u, sin_u; /* u = cos_u x + sin_u y, the angle in (-pi/2, pi/2] (cos_u >= 0) */
 KNIT_STRUCT_END(KLeanRoughness)
 
 /* Base roughness (alpha_x, alpha_y) widened by the slope covariance
  * (sxx, sxy, syy) of the normals aggregated over a footprint (paper Eq. 10).
- * The caller rotates its tangent frame by `angle` and uses (alpha_u, alpha_v). */
+ * The caller turns its tangent x to u and uses (alpha_u, alpha_v). The
+ * major axis is at half the angle of (cxx - cyy, 2 sxy); its cosine and
+ * sine come from the half-angle identities, in the form that does not
+ * cancel (no arctangent, sine or cosine). */
 KNIT_FN KLeanRoughness bsdf_lean_to_ggx(float alpha_x, float alpha_y, float sxx, float sxy,
                                         float syy) {
   KLeanRoughness r;
@@ -275,7 +278,24 @@ KNIT_FN KLeanRoughness bsdf_lean_to_ggx(float alpha_x, float alpha_y, float sxx,
   float rad = k_sqrt(half_diff * half_diff + sxy * sxy);
   float l1 = mean + rad;
   float l2 = k_fmax(mean - rad, KF(0.0));
-  r.angle = KF(0.5) * k_atan2(KF(2.0) * sxy, cxx - cyy); /* major axis; 0 when isotropic */
+  {
+    float c2 = cxx - cyy, s2 = KF(2.0) * sxy;
+    float len = k_sqrt(c2 * c2 + s2 * s2);
+    r.cos_u = KF(1.0); /* isotropic: x */
+    r.sin_u = KF(0.0);
+    if (len > KF(0.0)) {
+      c2 = c2 / len;
+      s2 = s2 / len;
+      if (c2 >= KF(0.0)) {
+        r.cos_u = k_sqrt(KF(0.5) * (KF(1.0) + c2));
+        r.sin_u = KF(0.5) * s2 / r.cos_u;
+      } else {
+        r.sin_u = k_sqrt(KF(0.5) * (KF(1.0) - c2));
+        if (s2 < KF(0.0)) r.sin_u = -r.sin_u;
+        r.cos_u = KF(0.5) * s2 / r.sin_u;
+      }
+    }
+  }
   r.alpha_u = k_fmax(k_sqrt(KF(2.0) * l1), KB_ALPHA_MIN);
   r.alpha_v = k_fmax(k_sqrt(KF(2.0) * l2), KB_ALPHA_MIN);
   return r;

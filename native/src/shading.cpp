@@ -270,7 +270,7 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     const float sxy = (c * c - s * s) * a.sxy + c * s * (a.syy - a.sxx);
     const k::KLeanRoughness lr = k::bsdf_lean_to_ggx(bp.roughness_x, bp.roughness_y, sxx, sxy, syy);
     const Vec3 bt = k::kv3_cross(n, tg);
-    const Vec3 tu = k::kv3_add(k::kv3_scale(tg, std::cos(lr.angle)), k::kv3_scale(bt, std::sin(lr.angle)));
+    const Vec3 tu = k::kv3_add(k::kv3_scale(tg, lr.cos_u), k::kv3_scale(bt, lr.sin_u));
     sh.spec_r = k::bsdf_mf_make(std::min(lr.alpha_u, 1.0f), std::min(lr.alpha_v, 1.0f), bp.eta);
     // The transmission lobe shares the shading frame, whose axes are the
     // reflection lobe's principal axes. Its own widened roughness has its own
@@ -279,11 +279,11 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     {
       const k::KLeanRoughness lt =
           k::bsdf_lean_to_ggx(bp.trans_roughness_x, bp.trans_roughness_y, sxx, sxy, syy);
-      float d = lt.angle - lr.angle;
-      const float half_pi = 1.57079633f;
-      while (d > half_pi) d -= 2 * half_pi;
-      while (d <= -half_pi) d += 2 * half_pi;
-      const bool swap = std::abs(d) > 0.5f * half_pi;
+      // The axes are more than 45 degrees apart (modulo 180) when the cosine
+      // of twice the angle between them is negative.
+      const float cos2d = (lt.cos_u * lt.cos_u - lt.sin_u * lt.sin_u) * (lr.cos_u * lr.cos_u - lr.sin_u * lr.sin_u) +
+                          4 * lt.cos_u * lt.sin_u * lr.cos_u * lr.sin_u;
+      const bool swap = cos2d < 0;
       const float au = swap ? lt.alpha_v : lt.alpha_u, av = swap ? lt.alpha_u : lt.alpha_v;
       sh.spec_t = k::bsdf_mf_make(std::min(au, 1.0f), std::min(av, 1.0f), bp.eta);
     }

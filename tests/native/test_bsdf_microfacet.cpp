@@ -227,7 +227,9 @@ TEST(BsdfMicrofacet, LeanCovarianceWidensRoughness) {
     r = k::bsdf_lean_to_ggx(float(ax), float(ay), float(sxx), float(sxy), float(syy));
     double cxx = ax * ax / 2 + sxx, cyy = ay * ay / 2 + syy;
     // The u axis is an eigenvector of C with eigenvalue alpha_u^2 / 2.
-    double cu = std::cos(r.angle), su = std::sin(r.angle);
+    double cu = r.cos_u, su = r.sin_u;
+    EXPECT_NEAR(cu * cu + su * su, 1.0, 1e-6);
+    EXPECT_GE(cu, 0.0);
     double lu = cxx * cu * cu + 2 * sxy * cu * su + cyy * su * su;
     double lv = cxx * su * su - 2 * sxy * cu * su + cyy * cu * cu;
     double off = (cyy - cxx) * cu * su + sxy * (cu * cu - su * su);
