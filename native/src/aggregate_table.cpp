@@ -379,7 +379,7 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
   // In points: the cells of a box of up to KNIT_MS_MAX_POINTS, else the
   // footprint's points (a counted box may hold up to 1e10 cells).
   a.points = all_cells(f) ? int(cells) : f.n;
-  a.p_delta = cells > 0 ? float(1 - hits / cells) : 1.0f;
+  a.p_delta = cells > 0 ? std::clamp(float(1 - hits / cells), 0.0f, 1.0f) : 1.0f;
   a.hits = hits > 0 ? std::max(1, int(std::lround(hits / cells * a.points))) : 0;
   a.steps = 0;
   a.color_pick = -1;
@@ -434,7 +434,10 @@ float FootprintTable::hit_fraction(int cls, const DirWeights& d) const {
   float h = 0;
   for (int q = 0; q < 4; ++q)
     h += d.w[size_t(q)] * stats_[size_t(slot) * kThetaBins * kPhiBins + size_t(d.node[size_t(q)])].hit;
-  return h;
+  // A convex combination of fractions, but the weights' float sum can
+  // exceed 1 by an ulp: 1 + 2^-23 of a fully covered direction made
+  // p_delta -1.2e-7, a negative shadow transmittance.
+  return std::clamp(h, 0.0f, 1.0f);
 }
 
 float FootprintTable::p_delta(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
@@ -443,7 +446,7 @@ float FootprintTable::p_delta(const KnitSurface& surface, const k::KFootprint& f
   std::array<double, kClasses> counts, cls_hits{};
   if (class_counts(surface, f, counts)) {
     counted_hits(counts, dw, cls_hits, cells, hits);
-    return cells > 0 ? float(1 - hits / cells) : 1.0f;
+    return cells > 0 ? std::clamp(float(1 - hits / cells), 0.0f, 1.0f) : 1.0f;
   }
   // Only hit fractions: bilinear in direction, per class.
   std::array<float, kClasses> hit;
@@ -454,7 +457,7 @@ float FootprintTable::p_delta(const KnitSurface& surface, const k::KFootprint& f
     cells += 1;
     hits += h;
   });
-  return cells > 0 ? float(1 - hits / cells) : 1.0f;
+  return cells > 0 ? std::clamp(float(1 - hits / cells), 0.0f, 1.0f) : 1.0f;
 }
 
 }  // namespace knit

@@ -295,6 +295,39 @@ TEST(FootprintTable, MaterialUsesItOnlyForLargeFootprints) {
 // knit_footprint): the table counts the 1e10 cells of such a box by pattern
 // repeats (never one by one), reports the footprint's points, not its
 // cells, and stays finite.
+// p_delta is a probability: in [0, 1] for every direction, also where the
+// table's four interpolated nodes are all fully covered and the float sum of
+// the bilinear weights exceeds 1 (a negative shadow transmittance of -1.2e-7
+// was caught by the renderer's sample check on the multi-scale half
+// cylinder; 2x2 rib, grazing directions).
+TEST(FootprintTable, PassFractionsAreProbabilities) {
+  KnitSurface s(Pattern::from_rows({{0, 0, 1, 1}}), StitchParams{});
+  const FootprintTable table(s, CapmOptions{}, 32);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> U(0.0f, 1.0f);
+  int full = 0;
+  float lo = 1, hi = 0;
+  for (int i = 0; i < 200000; ++i) {
+    const float z = 2 * U(rng) - 1, ph = 6.2831853f * U(rng), sr = std::sqrt(std::max(0.0f, 1 - z * z));
+    const k::kvec3 wi = k::kv3(sr * std::cos(ph), sr * std::sin(ph), z);
+    const float size = 4 * K_2PI * (1 + 3 * U(rng));
+    const k::KFootprint f = k::knit_footprint(s.geom(), 100 * U(rng), 100 * U(rng), k::kv3(size, 0, 0),
+                                              k::kv3(0, size * 0.7f, 0), 16, U(rng), U(rng));
+    if (!f.stratified) continue;
+    const float pd = table.p_delta(s, f, wi);
+    const k::KnitAggregate a = table.aggregate(s, f, wi);
+    ASSERT_GE(pd, 0.0f) << "direction " << wi.x << " " << wi.y << " " << wi.z;
+    ASSERT_LE(pd, 1.0f);
+    ASSERT_GE(a.p_delta, 0.0f) << "direction " << wi.x << " " << wi.y << " " << wi.z;
+    ASSERT_LE(a.p_delta, 1.0f);
+    lo = std::min(lo, pd);
+    hi = std::max(hi, pd);
+    if (pd == 0) ++full;
+  }
+  std::printf("[ p_delta ] range [%g, %g], fully covered footprints %d\n", lo, hi, full);
+  EXPECT_GT(full, 100);  // the directions that exposed the bug were exercised
+}
+
 TEST(FootprintTable, HugeFootprintsStayBounded) {
   KnitSurface s(seed(), StitchParams{});
   const FootprintTable table(s, CapmOptions{}, 16);
