@@ -14,7 +14,9 @@
 //   capm      FIRST queries along segments from the shell top, as a CAPM
 //             march's first step (directions up to 0.95 of grazing)
 //   shadow    FIRST queries along segments from inside the shell towards
-//             the upper hemisphere, as self-shadowing marches
+//             the upper hemisphere
+//   blocked   the same segments as ANY queries, as self-shadowing marches
+//             make them (hit or miss only)
 // Patterns: stockinette, seed (2 x 2 knit/purl: every boundary blended),
 // rib (1 x 1). Crane's default stitch parameters.
 #include <cmath>
@@ -35,7 +37,7 @@ knit::Pattern pattern_named(const std::string& name) {
 }
 
 int usage() {
-  std::fprintf(stderr, "usage: query_replay vertical|capm|shadow stockinette|seed|rib N [--dump FILE]\n");
+  std::fprintf(stderr, "usage: query_replay vertical|capm|shadow|blocked stockinette|seed|rib N [--dump FILE]\n");
   return 2;
 }
 
@@ -45,7 +47,8 @@ int main(int argc, char** argv) {
   namespace k = knit::k;
   if (argc != 4 && argc != 6) return usage();
   const std::string kind = argv[1];
-  if (kind != "vertical" && kind != "capm" && kind != "shadow") return usage();
+  const bool inside = kind == "shadow" || kind == "blocked";
+  if (kind != "vertical" && kind != "capm" && !inside) return usage();
   const long n = std::strtol(argv[3], nullptr, 10);
   if (n <= 0 || n > 100000000) return usage();
   FILE* dump = nullptr;
@@ -65,18 +68,19 @@ int main(int argc, char** argv) {
     double checksum = 0;
     for (long i = 0; i < n; ++i) {
       const float x = 20 + 60 * U(rng), y = 20 + 60 * U(rng);
-      const float th = std::acos(U(rng)) * (kind == "shadow" ? 1.0f : 0.95f), ph = 6.2831853f * U(rng);
+      const float th = std::acos(U(rng)) * (inside ? 1.0f : 0.95f), ph = 6.2831853f * U(rng);
       k::KnitLineHit h;
       if (kind == "vertical") {
         h = k::knit_vertical_query(g, s.codes(), s.colors(), x, y);
       } else {
-        const float dz = kind == "shadow" ? std::cos(th) : -std::cos(th);
+        const float dz = inside ? std::cos(th) : -std::cos(th);
         const k::kvec3 D = k::kv3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), dz);
-        const float z0 = kind == "shadow" ? (2 * U(rng) - 1) * g.shell_top : g.shell_top;
+        const float z0 = inside ? (2 * U(rng) - 1) * g.shell_top : g.shell_top;
         const float hs = std::sqrt(D.x * D.x + D.y * D.y);
         float len = D.z < 0 ? (z0 + g.shell_top) / -D.z : (g.shell_top - z0) / D.z;
         if (hs > 0) len = std::fmin(len, 6.2831853f / hs);  // CAPM's segment: a stitch across
-        h = k::knit_line_query(g, s.codes(), s.colors(), k::kv3(x, y, z0), D, 0.0f, len, KNIT_QUERY_FIRST);
+        h = k::knit_line_query(g, s.codes(), s.colors(), k::kv3(x, y, z0), D, 0.0f, len,
+                               kind == "blocked" ? KNIT_QUERY_ANY : KNIT_QUERY_FIRST);
       }
       checksum += h.hit ? h.s_in : 0;
       if (dump)

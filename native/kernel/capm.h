@@ -85,9 +85,11 @@ KNIT_FN float knit_capm_segment(KNIT_IN(KnitGeom) g, KNIT_IN(KnitCapm) st, float
 }
 
 /* One segment of length len along st.D (see knit_capm_segment); kx, ky: base
- * curvature for the metric (0 when unknown). */
+ * curvature for the metric (0 when unknown). any_hit != 0: a hit need only
+ * be a hit, not the nearest (KNIT_QUERY_ANY, for shadow rays). */
 KNIT_FN KnitCapm knit_capm_step_len(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
-                                    KNIT_IN(KnitCapm) in, float len, int max_steps, float kx, float ky) {
+                                    KNIT_IN(KnitCapm) in, float len, int max_steps, float kx, float ky,
+                                    int any_hit) {
   KnitCapm st = in;
   float dz = KZ(st.D);
   float eps = KF(1.0e-4) * g.shell_top;
@@ -100,7 +102,8 @@ KNIT_FN KnitCapm knit_capm_step_len(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
   float lp = kv3_len(dp);
   KnitLineHit h;
   if (st.state != KNIT_CAPM_MARCHING) return st;
-  h = knit_line_query(g, codes, colors, st.p, kv3_scale(dp, KF(1.0) / lp), KF(0.0), len * lp, KNIT_QUERY_FIRST);
+  h = knit_line_query(g, codes, colors, st.p, kv3_scale(dp, KF(1.0) / lp), KF(0.0), len * lp,
+                      any_hit != 0 ? KNIT_QUERY_ANY : KNIT_QUERY_FIRST);
   st.steps = st.steps + 1;
   if (h.hit != 0) {
     st.state = KNIT_CAPM_HIT;
@@ -115,9 +118,10 @@ KNIT_FN KnitCapm knit_capm_step_len(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
 }
 
 KNIT_FN KnitCapm knit_capm_step(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
-                                KNIT_IN(KnitCapm) st, float max_segment, int max_steps, float kx, float ky) {
+                                KNIT_IN(KnitCapm) st, float max_segment, int max_steps, float kx, float ky,
+                                int any_hit) {
   return knit_capm_step_len(g, codes, colors, st, knit_capm_segment(g, st, max_segment), max_steps,
-                            kx, ky);
+                            kx, ky, any_hit);
 }
 
 /* Midpoint of the next segment (where a second-order march fetches the frame). */
@@ -149,7 +153,7 @@ KNIT_FN KnitCapm knit_capm_correct(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), 
   KnitCapm again = knit_capm_aim(before, dir_local);
   float len = k_fmin(knit_capm_segment(g, again, max_segment),
                      KF(1.5) * k_fmax(hit.hit.s_in, KF(0.0)) + g.r);
-  again = knit_capm_step_len(g, codes, colors, again, len, hit.steps + 1, kx, ky);
+  again = knit_capm_step_len(g, codes, colors, again, len, hit.steps + 1, kx, ky, 0);
   if (again.state != KNIT_CAPM_HIT) return hit;
   again.steps = hit.steps;
   return again;
@@ -199,7 +203,8 @@ KNIT_FN KnitCapm knit_capm_start(KNIT_IN(KnitGeom) g, float x, float y, kvec3 wi
 /* March st on a base of constant curvature (flat: kx = ky = 0) whose frame at
  * (x, y) sees the ray as d0: midpoint rule and hit corrector as in the host
  * loop (KnitSurface::march). blocked_only != 0: the caller only asks whether
- * the ray is blocked (a shadow ray), so a hit ends the march as found,
+ * the ray is blocked (a shadow ray), so each segment's query stops at the
+ * first entry it finds (KNIT_QUERY_ANY), and a hit ends the march as found,
  * without the corrector that places it. */
 KNIT_FN KnitCapm knit_capm_march_curved(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
                                         KNIT_IN(KnitCapm) start, float x, float y, kvec3 d0, float kx, float ky,
@@ -214,7 +219,7 @@ KNIT_FN KnitCapm knit_capm_march_curved(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, cod
       st = knit_capm_aim(st, knit_curved_frame_dir(d0, kx, ky, KX(m) - x, KY(m) - y));
     }
     before = st;
-    st = knit_capm_step(g, codes, colors, st, max_segment, max_steps, kx, ky);
+    st = knit_capm_step(g, codes, colors, st, max_segment, max_steps, kx, ky, blocked_only);
     if (curved != 0 && st.state == KNIT_CAPM_HIT && blocked_only == 0) {
       kvec3 mh = knit_capm_hit_midpoint(before, st);
       st = knit_capm_correct(g, codes, colors, before, st,

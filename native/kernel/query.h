@@ -269,6 +269,9 @@ KNIT_FN KnitLineHit knit_crossing(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), K
 #define KNIT_QUERY_ENTRY 0  /* first entry and crossing count (s_out not computed) */
 #define KNIT_QUERY_EXIT 1   /* also the exit of the first crossing */
 #define KNIT_QUERY_COUNT 2  /* crossing count only: no entry points (hit stays 0) */
+#define KNIT_QUERY_ANY 4    /* whether the line enters a tube in [s_min, s_max] (a
+                               shadow ray): FIRST's search, stopped at the first
+                               entry found, which need not be the nearest */
 #define KNIT_QUERY_FIRST 3  /* first entry only (crossings stays 0): the pieces are
                                visited nearest first and the search stops at the
                                first piece the line reaches beyond the best entry */
@@ -330,6 +333,7 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
   float cand_s[KNIT_QUERY_MAX_CAND];
   int cand_k[KNIT_QUERY_MAX_CAND], cand_g[KNIT_QUERY_MAX_CAND];
   int ncand = 0;
+  int first = mode == KNIT_QUERY_FIRST || mode == KNIT_QUERY_ANY ? 1 : 0; /* ordered search */
   /* The exact piece bounds refine only z (and slip-stitch floats): skip
    * them when the segment is vertical and spans the whole shell in z (FIRST
    * then visits the pieces unordered: their boxes would not order them). */
@@ -339,7 +343,7 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
   /* Vertical lines through knit and purl rows test the distance in x and y
    * before looking at the pattern (FIRST queries order their pieces first). */
   int xy_first = g.has_floats == 0 && KX(inv) == KF(0.0) && KY(inv) == KF(0.0) &&
-                         (mode != KNIT_QUERY_FIRST || skip_exact != 0)
+                         (first == 0 || skip_exact != 0)
                      ? 1 : 0;
   if (inside == 0) return best;
   for (j = 0; j < 8; j++) {
@@ -372,7 +376,7 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
       ux = knit_slab_range((t0 + oxl[jp]) - rr, (t0 + K_PI_4 + oxh[jp]) + rr, KX(pa), KX(inv));
       u = k_fmax(uyl[jp], KX(ux));
       if (u > k_fmin(uyh[jp], KY(ux))) continue;
-      if (mode == KNIT_QUERY_FIRST && skip_exact == 0 && ncand < KNIT_QUERY_MAX_CAND) {
+      if (first != 0 && skip_exact == 0 && ncand < KNIT_QUERY_MAX_CAND) {
         /* ordered below by this entry (a lower bound of the exact box's) */
         cand_s[ncand] = s_min + u * (s_max - s_min);
         cand_k[ncand] = k;
@@ -419,6 +423,7 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
       last_t = t;
       if (h.s_out >= s_min && h.s_in <= s_max) count = count + 1;
       if (h.s_in >= s_min && h.s_in <= s_max && h.s_in < best.s_in) best = h;
+      if (mode == KNIT_QUERY_ANY && best.hit != 0) return best;
     }
   }
   /* FIRST: nearest box first; no later box can hold an entry before the best. */
@@ -442,9 +447,12 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
     t = knit_piece_closest_t(g, codes, sp, cand_g[bi], o, D, m);
     if (t == K_BIG) continue;
     h = knit_crossing(g, codes, colors, sp, o, D, t, 0);
-    if (h.hit != 0 && h.s_in >= s_min && h.s_in <= s_max && h.s_in < best.s_in) best = h;
+    if (h.hit != 0 && h.s_in >= s_min && h.s_in <= s_max && h.s_in < best.s_in) {
+      best = h;
+      if (mode == KNIT_QUERY_ANY) break;
+    }
   }
-  best.crossings = mode == KNIT_QUERY_FIRST ? 0 : count;
+  best.crossings = first != 0 ? 0 : count;
   return best;
 }
 

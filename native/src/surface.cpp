@@ -132,7 +132,7 @@ k::KnitCapm KnitSurface::march(k::KnitCapm start, Vec3 ray_world, const FramePro
       st = k::knit_capm_aim(st, k::kv3_to_local(ray_world, t, b, n));
     }
     const k::KnitCapm before = st;
-    st = k::knit_capm_step(geom_, codes(), colors(), st, seg, opt.max_steps, kappa.x, kappa.y);
+    st = k::knit_capm_step(geom_, codes(), colors(), st, seg, opt.max_steps, kappa.x, kappa.y, blocked_only ? 1 : 0);
     if (st.state == KNIT_CAPM_HIT && !flat && !blocked_only) {
       const Vec3 m = k::knit_capm_hit_midpoint(before, st);
       fp.frame_near(m.x, m.y, hint, t, b, n);

@@ -238,7 +238,7 @@ TEST(Stitch, FirstEntryQueryFindsWhatTheFullQueryFinds) {
   KnitSurface s = make(test::seed());
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> U(0, 1);
-  int hits = 0, close = 0, n = 0;
+  int hits = 0, close = 0, n = 0, any_later = 0;
   for (float len : {4.0f, 60.0f}) {
     for (int i = 0; i < 4000; ++i) {
       const float th = 1.5f * U(rng), ph = 6.2831853f * U(rng);
@@ -248,6 +248,16 @@ TEST(Stitch, FirstEntryQueryFindsWhatTheFullQueryFinds) {
       const k::KnitLineHit b = k::knit_line_query(s.geom(), s.codes(), s.colors(), o, D, 0, len, KNIT_QUERY_FIRST);
       ASSERT_EQ(a.hit, b.hit) << "ray " << i << " length " << len;
       EXPECT_EQ(b.crossings, 0);
+      // ANY (shadow rays) stops at the first entry it finds: the same hit or
+      // miss, with an entry inside the range (not necessarily the nearest).
+      const k::KnitLineHit c = k::knit_line_query(s.geom(), s.codes(), s.colors(), o, D, 0, len, KNIT_QUERY_ANY);
+      ASSERT_EQ(c.hit, b.hit) << "ray " << i << " length " << len;
+      if (c.hit) {
+        EXPECT_GE(c.s_in, 0.0f);
+        EXPECT_LE(c.s_in, len);
+        EXPECT_GE(c.s_in, b.s_in - 1e-5f);
+        any_later += c.s_in > b.s_in + 1e-3f * s.params().r;
+      }
       if (a.hit) {
         ++hits;
         close += std::abs(a.s_in - b.s_in) < 1e-3f * s.params().r;
@@ -257,6 +267,7 @@ TEST(Stitch, FirstEntryQueryFindsWhatTheFullQueryFinds) {
   }
   EXPECT_GT(hits, n / 4);
   EXPECT_GT(close, hits * 95 / 100) << "entries agree on " << close << " of " << hits << " hits";
+  std::printf("[ any ] %d hits, of which ANY stopped at a later entry than FIRST's in %d\n", hits, any_later);
 }
 
 TEST(Stitch, ParamsValidationNamesTheFieldAndValue) {

@@ -110,9 +110,11 @@ class KnitSurface {
   // the world-space ray `ray_world` (the direction it travels) with the
   // frames of `frame` (flat if null; its curvature() sets the metric and the
   // segment length). Returns the final kernel state. blocked_only: the
-  // caller only asks whether the ray is blocked (a shadow ray), so a hit ends
-  // the march as found, without the midpoint corrector that places it
-  // (knit_capm_correct: one more line query per hit on a curved base).
+  // caller only asks whether the ray is blocked (a shadow ray), so each
+  // segment's line query stops at the first entry it finds, not the nearest
+  // (KNIT_QUERY_ANY), and a hit ends the march as found, without the
+  // midpoint corrector that places it (knit_capm_correct: one more line
+  // query per hit on a curved base). The state's hit is then only a hit.
   k::KnitCapm march(k::KnitCapm start, Vec3 ray_world, const FrameProvider* frame,
                     const CapmOptions& opt = {}, bool blocked_only = false) const;
   SurfaceHit to_hit(const k::KnitCapm& st) const;
