@@ -113,10 +113,11 @@ size_t KnitMaterial::state_bytes() const {
          (table_ ? table_->bytes() : 0);
 }
 
-k::KnitCapm KnitMaterial::march(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame) const {
+k::KnitCapm KnitMaterial::march(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
+                                bool blocked_only) const {
   const float x = params_.uv_scale * hit.u, y = params_.uv_scale * hit.v;
   const Vec3 wi = k::kv3_neg(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n));
-  return march_state(hit, k::knit_capm_start(surface_.geom(), x, y, wi), ray_dir, frame);
+  return march_state(hit, k::knit_capm_start(surface_.geom(), x, y, wi), ray_dir, frame, blocked_only);
 }
 
 k::KnitCapm KnitMaterial::march_from(const BaseHit& hit, const KnitShade& from, Vec3 dir_world,
@@ -387,7 +388,9 @@ float KnitMaterial::transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameP
                                      params_.capm_options.max_segment, params_.capm_options.max_steps);
   }
   if (!params_.capm) return shade(hit, ray_dir, frame, shift).pass_through ? 1.0f : 0.0f;
-  return march(hit, ray_dir, frame).state == KNIT_CAPM_HIT ? 0.0f : 1.0f;
+  // Hit or miss only (a corrected hit stays a hit: knit_capm_correct keeps
+  // the first one when the corrected segment misses).
+  return march(hit, ray_dir, frame, true).state == KNIT_CAPM_HIT ? 0.0f : 1.0f;
 }
 
 k::KYarnBsdf KnitMaterial::kernel_bsdf(const KnitShade& sh) const {

@@ -109,7 +109,7 @@ class KnitMaterial {
   const FootprintTable* footprint_table() const { return table_.get(); }
 
  private:
-  k::KnitCapm march(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame) const;
+  k::KnitCapm march(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame, bool blocked_only = false) const;
   // March from `start` (pattern space) for a ray along ray_dir (world) on
   // the base of `hit`: the frame field or hit's curvature bends it.
   // blocked_only: see KnitSurface::march (and knit_capm_march_curved, the
