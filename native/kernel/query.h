@@ -269,12 +269,12 @@ KNIT_FN KnitLineHit knit_crossing(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), K
 #define KNIT_QUERY_ENTRY 0  /* first entry and crossing count (s_out not computed) */
 #define KNIT_QUERY_EXIT 1   /* also the exit of the first crossing */
 #define KNIT_QUERY_COUNT 2  /* crossing count only: no entry points (hit stays 0) */
-#define KNIT_QUERY_ANY 4    /* whether the line enters a tube in [s_min, s_max] (a
-                               shadow ray): FIRST's search, stopped at the first
-                               entry found, which need not be the nearest */
 #define KNIT_QUERY_FIRST 3  /* first entry only (crossings stays 0): the pieces are
                                visited nearest first and the search stops at the
                                first piece the line reaches beyond the best entry */
+#define KNIT_QUERY_ANY 4    /* whether the line enters a tube in [s_min, s_max] (a
+                               shadow ray): FIRST's search, stopped at the first
+                               entry found, which need not be the nearest */
 
 /* Candidate pieces a FIRST query can order; more are processed unordered. */
 #define KNIT_QUERY_MAX_CAND 48
@@ -341,7 +341,8 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
                            k_fmin(KZ(pa), KZ(pb)) <= -g.shell_top && k_fmax(KZ(pa), KZ(pb)) >= g.shell_top
                        ? 1 : 0;
   /* Vertical lines through knit and purl rows test the distance in x and y
-   * before looking at the pattern (FIRST queries order their pieces first). */
+   * before looking at the pattern (FIRST and ANY queries order their pieces
+   * first, unless they skip the exact bounds). */
   int xy_first = g.has_floats == 0 && KX(inv) == KF(0.0) && KY(inv) == KF(0.0) &&
                          (first == 0 || skip_exact != 0)
                      ? 1 : 0;
