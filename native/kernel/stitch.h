@@ -474,8 +474,9 @@ KNIT_FN KQuad knit_span_piece_quad(KNIT_IN(KnitGeom) g, KNIT_IN(KSpan) sp, int g
   {
     /* Blended piece: interpolate the blended curve at the piece's nodes,
      * lo + w (hi - lo) with lo, hi the profiles left and right of the
-     * boundary (knit_blend_curve). The nodes are nodes of both profiles (the
-     * neighbour's 16 further along its own phase), and the smoothstep's
+     * boundary (knit_blend_curve). The nodes are nodes of both profiles (in
+     * the neighbour's numbering 16 apart from the cell's own: its phase is
+     * 2 pi off), and the smoothstep's
      * weight there is exact in float: x = (t - tb + pi/4) / (pi/2) is
      * 0, 1/4, 1/2 on piece 7 and 1/2, 3/4, 1 on piece 0, where
      * w(x) = x^3 (10 - 15 x + 6 x^2) is 0, 53/512, 1/2 and 1/2, 459/512, 1.
