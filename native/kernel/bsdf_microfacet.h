@@ -278,22 +278,18 @@ KNIT_FN KLeanRoughness bsdf_lean_to_ggx(float alpha_x, float alpha_y, float sxx,
   float rad = k_sqrt(half_diff * half_diff + sxy * sxy);
   float l1 = mean + rad;
   float l2 = k_fmax(mean - rad, KF(0.0));
-  {
-    float c2 = cxx - cyy, s2 = KF(2.0) * sxy;
-    float len = k_sqrt(c2 * c2 + s2 * s2);
-    r.cos_u = KF(1.0); /* isotropic: x */
-    r.sin_u = KF(0.0);
-    if (len > KF(0.0)) {
-      c2 = c2 / len;
-      s2 = s2 / len;
-      if (c2 >= KF(0.0)) {
-        r.cos_u = k_sqrt(KF(0.5) * (KF(1.0) + c2));
-        r.sin_u = KF(0.5) * s2 / r.cos_u;
-      } else {
-        r.sin_u = k_sqrt(KF(0.5) * (KF(1.0) - c2));
-        if (s2 < KF(0.0)) r.sin_u = -r.sin_u;
-        r.cos_u = KF(0.5) * s2 / r.sin_u;
-      }
+  r.cos_u = KF(1.0); /* isotropic: x */
+  r.sin_u = KF(0.0);
+  if (rad > KF(0.0)) {
+    /* cos and sin of twice the angle: (half_diff, sxy) / rad */
+    float c2 = half_diff / rad, s2 = sxy / rad;
+    if (c2 >= KF(0.0)) {
+      r.cos_u = k_sqrt(KF(0.5) * (KF(1.0) + c2));
+      r.sin_u = KF(0.5) * s2 / r.cos_u;
+    } else {
+      r.sin_u = k_sqrt(KF(0.5) * (KF(1.0) - c2));
+      if (s2 < KF(0.0)) r.sin_u = -r.sin_u;
+      r.cos_u = KF(0.5) * s2 / r.sin_u;
     }
   }
   r.alpha_u = k_fmax(k_sqrt(KF(2.0) * l1), KB_ALPHA_MIN);

@@ -337,15 +337,13 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
   /* The exact piece bounds refine only z (and slip-stitch floats): skip
    * them when the segment is vertical and spans the whole shell in z (FIRST
    * then visits the pieces unordered: their boxes would not order them). */
-  int skip_exact = g.has_floats == 0 && KX(inv) == KF(0.0) && KY(inv) == KF(0.0) &&
-                           k_fmin(KZ(pa), KZ(pb)) <= -g.shell_top && k_fmax(KZ(pa), KZ(pb)) >= g.shell_top
+  int vertical = g.has_floats == 0 && KX(inv) == KF(0.0) && KY(inv) == KF(0.0) ? 1 : 0; /* no floats either */
+  int skip_exact = vertical != 0 && k_fmin(KZ(pa), KZ(pb)) <= -g.shell_top && k_fmax(KZ(pa), KZ(pb)) >= g.shell_top
                        ? 1 : 0;
   /* Vertical lines through knit and purl rows test the distance in x and y
    * before looking at the pattern (FIRST and ANY queries order their pieces
    * first, unless they skip the exact bounds). */
-  int xy_first = g.has_floats == 0 && KX(inv) == KF(0.0) && KY(inv) == KF(0.0) &&
-                         (first == 0 || skip_exact != 0)
-                     ? 1 : 0;
+  int xy_first = vertical != 0 && (first == 0 || skip_exact != 0) ? 1 : 0;
   if (inside == 0) return best;
   for (j = 0; j < 8; j++) {
     KBox off = knit_piece_offsets_xy(g, j);

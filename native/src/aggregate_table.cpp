@@ -20,6 +20,11 @@ Vec3 direction(int it, int ip) {
   return k::kv3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
 }
 
+// p_delta of `hits` out of `cells` (1 for no cells), kept a probability.
+float pass_fraction(double hits, double cells) {
+  return cells > 0 ? std::clamp(float(1 - hits / cells), 0.0f, 1.0f) : 1.0f;
+}
+
 
 // A weighted mix of hit-conditioned statistics (weights: share x hit
 // fraction); the tangents, lines rather than arrows, are sign-aligned.
@@ -379,7 +384,7 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
   // In points: the cells of a box of up to KNIT_MS_MAX_POINTS, else the
   // footprint's points (a counted box may hold up to 1e10 cells).
   a.points = all_cells(f) ? int(cells) : f.n;
-  a.p_delta = cells > 0 ? std::clamp(float(1 - hits / cells), 0.0f, 1.0f) : 1.0f;
+  a.p_delta = pass_fraction(hits, cells);
   a.hits = hits > 0 ? std::max(1, int(std::lround(hits / cells * a.points))) : 0;
   a.steps = 0;
   a.color_pick = -1;
@@ -446,7 +451,7 @@ float FootprintTable::p_delta(const KnitSurface& surface, const k::KFootprint& f
   std::array<double, kClasses> counts, cls_hits{};
   if (class_counts(surface, f, counts)) {
     counted_hits(counts, dw, cls_hits, cells, hits);
-    return cells > 0 ? std::clamp(float(1 - hits / cells), 0.0f, 1.0f) : 1.0f;
+    return pass_fraction(hits, cells);
   }
   // Only hit fractions: bilinear in direction, per class.
   std::array<float, kClasses> hit;
@@ -457,7 +462,7 @@ float FootprintTable::p_delta(const KnitSurface& surface, const k::KFootprint& f
     cells += 1;
     hits += h;
   });
-  return cells > 0 ? std::clamp(float(1 - hits / cells), 0.0f, 1.0f) : 1.0f;
+  return pass_fraction(hits, cells);
 }
 
 }  // namespace knit
