@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <random>
 #include <utility>
 
@@ -19,6 +20,45 @@ Vec3 direction(int it, int ip) {
   const float ph = float(ip) * 2 * kPi / float(FootprintTable::kPhiBins);
   return k::kv3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
 }
+
+// s[i] += w m[i] for i < n, n a multiple of 4: four lanes at a time where
+// the compiler has vector types (GCC and Clang: it does not vectorise this
+// sum unrolled inside the class loop by itself).
+template <int n>
+inline void add_scaled(float* s, const float* m, float w) {
+  static_assert(n % 4 == 0, "whole vectors");
+#if defined(__GNUC__)
+  typedef float v4 __attribute__((vector_size(16), aligned(4)));
+  for (int i = 0; i < n; i += 4) {
+    v4 a, b;
+    std::memcpy(&a, s + i, sizeof a);
+    std::memcpy(&b, m + i, sizeof b);
+    a += w * b;
+    std::memcpy(s + i, &a, sizeof a);
+  }
+#else
+  for (int i = 0; i < n; ++i) s[i] += w * m[i];
+#endif
+}
+
+}  // namespace
+
+// An odd polynomial for atan on [0, 1], fitted minimax for this table, and
+// the octant identities. (acosf and atan2f from libm took a fifth of the
+// aggregate's instructions.)
+float atan2_approx(float y, float x) {
+  const float ax = std::fabs(x), ay = std::fabs(y);
+  const float hi = std::max(ax, ay), lo = std::min(ax, ay);
+  if (!(hi > 0)) return 0;
+  const float t = lo / hi, s = t * t;
+  float r = t * (0.99997723f +
+                 s * (-0.33262283f + s * (0.19354036f + s * (-0.11642643f + s * (0.05264729f + s * -0.01171911f)))));
+  if (ay > ax) r = 0.5f * kPi - r;
+  if (x < 0) r = kPi - r;
+  return y < 0 ? -r : r;
+}
+
+namespace {
 
 // p_delta of `hits` out of `cells` (1 for no cells), kept a probability.
 float pass_fraction(double hits, double cells) {
@@ -120,6 +160,7 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
   one_colour_ = std::all_of(surface.colors(), surface.colors() + class_of_.size(), [](int c) { return c == 0; });
   int slots = 0;
   for (int i = 0; i < kClasses; ++i) slot_[size_t(i)] = cells[size_t(i)].empty() ? -1 : slots++;
+  slots_ = slots;
   if (slots == 1)
     single_class_ = int(std::find_if(slot_.begin(), slot_.end(), [](int s) { return s >= 0; }) - slot_.begin());
   for (int i = 0; i < kClasses; ++i)
@@ -134,7 +175,7 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
           p[c + 1] = uint16_t(p[c] + (slot_[class_of_[pr * size_t(g.cols) + c]] == int(s) ? 1 : 0));
       }
   }
-  stats_.assign(size_t(slots) * kThetaBins * kPhiBins, Stats{});
+  std::vector<Stats> stats(size_t(slots) * kThetaBins * kPhiBins);
   const int m_rays = std::max(1, rays_per_direction);
   tbb::parallel_for(0, kClasses * kThetaBins, [&](int job) {
     const int cls = job / kThetaBins, it = job % kThetaBins;
@@ -174,7 +215,7 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
         const int dk = std::clamp(st.hit.row - cell.first, -1, 1), dc = std::clamp(st.hit.col - cell.second, -1, 1);
         near[(dk + 1) * 3 + dc + 1] += 1;
       }
-      Stats& s = stats_[(size_t(slot_[size_t(cls)]) * kThetaBins + size_t(it)) * kPhiBins + size_t(ip)];
+      Stats& s = stats[(size_t(slot_[size_t(cls)]) * kThetaBins + size_t(it)) * kPhiBins + size_t(ip)];
       s.hit = float(hits / m_rays);
       if (hits > 0) {
         const double inv = 1.0 / hits;
@@ -200,7 +241,7 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
   // marched with different points, are averaged.
   for (int slot = 0; slot < slots; ++slot)
     for (int it : {0, kThetaBins - 1}) {
-      Stats* row = &stats_[(size_t(slot) * kThetaBins + size_t(it)) * kPhiBins];
+      Stats* row = &stats[(size_t(slot) * kThetaBins + size_t(it)) * kPhiBins];
       double hit = 0;
       for (int ip = 0; ip < kPhiBins; ++ip) hit += row[ip].hit;
       StatsMix<Stats> mix;
@@ -208,15 +249,25 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
       const Stats avg = mix.result(float(hit / kPhiBins));
       for (int ip = 0; ip < kPhiBins; ++ip) row[ip] = avg;
     }
-}
-
-int FootprintTable::classes_present() const {
-  return int(std::count_if(slot_.begin(), slot_.end(), [](int s) { return s >= 0; }));
+  moments_.resize(stats.size() * kMoments);
+  for (size_t i = 0; i < stats.size(); ++i) {
+    const Stats& st = stats[i];
+    float* m = &moments_[i * kMoments];
+    const float h = st.hit;
+    m[kHit] = h;
+    const float means[] = {st.nx, st.ny, st.nz, st.sx, st.sy, st.sxx, st.sxy, st.syy, st.layers, st.z};
+    for (int q = 0; q < 10; ++q) m[kNormal + q] = h * means[q];
+    for (int q = 0; q < 9; ++q) m[kNear + q] = h * st.near[q];
+    m[kTangent] = h * st.tx;
+    m[kTangent + 1] = h * st.ty;
+    m[kTangent + 2] = h * st.tz;
+    m[kTangent + 3] = 0;
+  }
 }
 
 FootprintTable::DirWeights FootprintTable::dir_weights(Vec3 wi) {
-  const float th = std::acos(std::clamp(wi.z, -1.0f, 1.0f));
-  float ph = std::atan2(wi.y, wi.x);
+  const float th = atan2_approx(std::sqrt(wi.x * wi.x + wi.y * wi.y), wi.z);  // in [0, pi]
+  float ph = atan2_approx(wi.y, wi.x);
   if (ph < 0) ph += 2 * kPi;
   const float ft = std::clamp(th / kPi * float(kThetaBins - 1), 0.0f, float(kThetaBins - 1));
   const int i0 = std::min(int(ft), kThetaBins - 1), i1 = std::min(i0 + 1, kThetaBins - 1);
@@ -230,18 +281,33 @@ FootprintTable::DirWeights FootprintTable::dir_weights(Vec3 wi) {
   return d;
 }
 
-FootprintTable::Stats FootprintTable::lookup(int cls, const DirWeights& d) const {
+float FootprintTable::hit_fraction(int cls, const DirWeights& d) const {
   const int slot = slot_[size_t(cls)];
-  if (slot < 0) return Stats{};  // not in the pattern (cannot happen for its own cells)
-  // Hit-conditioned means are interpolated with hit-weighted weights.
-  float hit = 0;
-  StatsMix<Stats> mix;
+  return slot < 0 ? 0 : slot_hit_fraction(slot, d);  // absent: not for the pattern's own cells
+}
+
+float FootprintTable::slot_hit_fraction(int slot, const DirWeights& d) const {
+  float h = 0;
+  for (int q = 0; q < 4; ++q) h += d.w[size_t(q)] * moments(slot, d.node[size_t(q)])[kHit];
+  // A convex combination of fractions, but the weights' float sum can
+  // exceed 1 by an ulp: 1 + 2^-23 of a fully covered direction made
+  // p_delta -1.2e-7, a negative shadow transmittance.
+  return std::clamp(h, 0.0f, 1.0f);
+}
+
+std::array<float, 9> FootprintTable::near_shares(int cls, const DirWeights& d) const {
+  std::array<float, 9> near{};
+  const int slot = slot_[size_t(cls)];
+  if (slot < 0) return near;
+  float h = 0;
   for (int q = 0; q < 4; ++q) {
-    const Stats& s = stats_[size_t(slot) * kThetaBins * kPhiBins + size_t(d.node[size_t(q)])];
-    hit += d.w[size_t(q)] * s.hit;
-    mix.add(s, d.w[size_t(q)] * s.hit);
+    const float* m = moments(slot, d.node[size_t(q)]);
+    h += d.w[size_t(q)] * m[kHit];
+    for (int i = 0; i < 9; ++i) near[size_t(i)] += d.w[size_t(q)] * m[kNear + i];
   }
-  return mix.result(hit);
+  if (h > 0)
+    for (float& v : near) v /= h;
+  return near;
 }
 
 template <class Visit>
@@ -278,7 +344,7 @@ bool FootprintTable::class_counts(const KnitSurface& surface, const k::KFootprin
   }
   if (prefix_.empty()) return false;
   const k::KnitGeom& g = surface.geom();
-  const int slots = classes_present();
+  const int slots = slots_;
   const size_t cols1 = size_t(g.cols) + 1;
   // Columns [c0, c0 + ncx) of a row, wrapped: `full` whole rows and a rest.
   const int c0 = k::k_modi(f.bx0, g.cols);
@@ -291,11 +357,12 @@ bool FootprintTable::class_counts(const KnitSurface& surface, const k::KFootprin
   const int nr = std::min(f.ncy, g.rows);
   const int64_t per = f.ncy / g.rows, extra = f.ncy % g.rows;
   std::array<int64_t, kClasses> n{};  // by slot
-  for (int cy = 0; cy < nr; ++cy) {
-    const size_t pr = size_t(g.rows - 1 - k::k_modi(f.by0 + cy, g.rows));
+  // Pattern row of box row cy, counted down with wrap-around (one modulo).
+  int pr = g.rows - 1 - k::k_modi(f.by0, g.rows);
+  for (int cy = 0; cy < nr; ++cy, pr = pr > 0 ? pr - 1 : g.rows - 1) {
     const int64_t times = per + (cy < extra ? 1 : 0);
     for (int s = 0; s < slots; ++s) {
-      const uint16_t* p = &prefix_[(pr * size_t(slots) + size_t(s)) * cols1];
+      const uint16_t* p = &prefix_[(size_t(pr) * size_t(slots) + size_t(s)) * cols1];
       int64_t m = full * p[g.cols];
       if (c0 + rest <= g.cols) {
         m += p[c0 + rest] - p[c0];
@@ -309,58 +376,40 @@ bool FootprintTable::class_counts(const KnitSurface& surface, const k::KFootprin
   return true;
 }
 
-void FootprintTable::counted_hits(const std::array<double, kClasses>& counts, const DirWeights& d,
-                                  std::array<double, kClasses>& cls_hits, double& cells, double& hits) const {
-  for (int cls = 0; cls < kClasses; ++cls) {
-    if (counts[size_t(cls)] <= 0) continue;
-    cells += counts[size_t(cls)];
-    const float h = hit_fraction(cls, d);
-    if (h <= 0) continue;
-    cls_hits[size_t(cls)] = counts[size_t(cls)] * double(h);
-    hits += cls_hits[size_t(cls)];
-  }
-}
-
 k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
   const k::KnitGeom& g = surface.geom();
   k::KnitAggregate a{};
-  // The direction is the same for every cell: per class present, its hit
-  // fraction (and, with several colours, its neighbour shares) on first
-  // use, and its full statistics once at the end for the mix. (Holding a
-  // Stats per class, value-initialised, took half of this function's time
-  // in memset.)
+  // The direction is the same for every cell, so the aggregate is a sum
+  // over the classes present: each class's four direction nodes weighted by
+  // its share of the box's cells (moments: hit-weighted, so that this one
+  // weighted sum gives the hit-weighted means).
   const DirWeights dw = dir_weights(wi);
-  std::array<float, kClasses> cls_hit;
+  // How many cells of each class the box holds, when the table can count
+  // them (see class_counts), else by visiting them; with several colour
+  // indices the colours visit the cells they need.
+  std::array<double, kClasses> counts;
+  const bool counted = class_counts(surface, f, counts);
+  std::array<float, kClasses> cls_hit;  // hit fractions of the visited classes, on first use
   cls_hit.fill(-1);
-  std::array<double, kClasses> cls_hits{};
   std::array<std::array<float, 9>, kClasses> cls_near;  // row cls valid once near_ready[cls]
   std::array<bool, kClasses> near_ready{};
-  double cells = 0, hits = 0;
   struct Pick {
     int colour;
     float cum;
   };
   std::array<Pick, KNIT_MS_MAX_POINTS> picks;  // the first npicks are set
   int npicks = 0;
-  // How many cells of each class the box holds, when the table can count
-  // them (see class_counts): then the geometry needs no visit, and the
-  // colours (several colour indices) only visit the cells they need.
-  std::array<double, kClasses> counts;
-  const bool counted = class_counts(surface, f, counts);
-  if (counted) counted_hits(counts, dw, cls_hits, cells, hits);
   double visit_hits = 0;  // hits of the visited cells (the colours' weights)
   if (!counted || !one_colour_) for_each_cell(surface, f, [&](int cls, int k, int c) {
+    if (!counted) counts[size_t(cls)] += 1;
+    if (one_colour_) return;
     float& h = cls_hit[size_t(cls)];
     if (h < 0) h = hit_fraction(cls, dw);
-    if (!counted) cells += 1;
     if (h <= 0) return;
     const float w = h;
     visit_hits += w;
-    if (!counted) cls_hits[size_t(cls)] += w;
-    if (one_colour_) return;
     if (!near_ready[size_t(cls)]) {
-      const Stats s = lookup(cls, dw);
-      std::copy(std::begin(s.near), std::end(s.near), cls_near[size_t(cls)].begin());
+      cls_near[size_t(cls)] = near_shares(cls, dw);
       near_ready[size_t(cls)] = true;
     }
     const std::array<float, 9>& near = cls_near[size_t(cls)];
@@ -380,33 +429,49 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
       }
     if (npicks < KNIT_MS_MAX_POINTS) picks[size_t(npicks++)] = {colour, float(visit_hits)};
   });
-  if (!counted) hits = visit_hits;
+  double cells = 0;
+  for (double n : counts) cells += n;
+  std::array<float, kLinear> sum{};
+  Vec3 tsum = k::kv3(0, 0, 0);
+  if (cells > 0) {
+    for (int slot = 0; slot < slots_; ++slot) {
+      const double n = counts[size_t(class_of_slot_[size_t(slot)])];
+      if (!(n > 0)) continue;
+      const float share = float(n / cells);
+      for (int q = 0; q < 4; ++q) {
+        const float w = share * dw.w[size_t(q)];
+        const float* m = moments(slot, dw.node[size_t(q)]);
+        add_scaled<kLinear>(sum.data(), m, w);
+        // Tangents are lines, not arrows: sign-aligned with the sum so far.
+        const Vec3 t = k::kv3_scale(k::kv3(m[kTangent], m[kTangent + 1], m[kTangent + 2]), w);
+        tsum = k::kv3_dot(tsum, t) < 0 ? k::kv3_sub(tsum, t) : k::kv3_add(tsum, t);
+      }
+    }
+  }
   // In points: the cells of a box of up to KNIT_MS_MAX_POINTS, else the
   // footprint's points (a counted box may hold up to 1e10 cells).
   a.points = all_cells(f) ? int(cells) : f.n;
-  a.p_delta = pass_fraction(hits, cells);
-  a.hits = hits > 0 ? std::max(1, int(std::lround(hits / cells * a.points))) : 0;
+  a.p_delta = pass_of(counts, dw);  // exactly as p_delta() has it (shadow rays)
+  const float hit = 1 - a.p_delta;  // the hit fraction over the box
+  a.hits = hit > 0 ? std::max(1, int(std::lround(hit * float(a.points)))) : 0;
   a.steps = 0;
   a.color_pick = -1;
-  if (hits <= 0) {
+  if (!(hit > 0 && sum[kHit] > 0)) {
     a.n = k::kv3(0, 0, 1);
     a.tangent = k::kv3(1, 0, 0);
     a.position = k::kv3(f.x, f.y, 0);
     return a;
   }
-  // The hit-weighted means over the cells (by class: the same sums); the
-  // covariance about the mean slope.
-  StatsMix<Stats> mix;
-  for (int cls = 0; cls < kClasses; ++cls)
-    if (cls_hits[size_t(cls)] > 0) mix.add(lookup(cls, dw), float(cls_hits[size_t(cls)]));
-  const Stats m = mix.result(float(hits / cells));
-  a.n = k::kv3_normalize(k::kv3(m.nx, m.ny, m.nz));
-  a.tangent = k::kv3(m.tx, m.ty, m.tz);
-  a.position = k::kv3(f.x, f.y, m.z);
-  a.sxx = std::max(m.sxx - m.sx * m.sx, 0.0f);
-  a.syy = std::max(m.syy - m.sy * m.sy, 0.0f);
-  a.sxy = m.sxy - m.sx * m.sy;
-  a.layers = m.layers;
+  // The hit-weighted means; the slopes' covariance about their mean.
+  const float inv = 1 / sum[kHit];
+  const float sx = sum[kSlope] * inv, sy = sum[kSlope + 1] * inv;
+  a.n = k::kv3_normalize(k::kv3(sum[kNormal], sum[kNormal + 1], sum[kNormal + 2]));
+  a.tangent = k::kv3_normalize(tsum);
+  a.position = k::kv3(f.x, f.y, sum[kZ] * inv);
+  a.sxx = std::max(sum[kSlope2] * inv - sx * sx, 0.0f);
+  a.sxy = sum[kSlope2 + 1] * inv - sx * sy;
+  a.syy = std::max(sum[kSlope2 + 2] * inv - sy * sy, 0.0f);
+  a.layers = sum[kLayers] * inv;
   if (one_colour_) {
     a.color_w[0] = 1;
     a.color_pick = 0;
@@ -421,8 +486,8 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
     a.color_pick = col;
     return a;
   }
-  const double inv = 1 / visit_hits;
-  for (float& w : a.color_w) w = float(w * inv);
+  const double inv_visit = 1 / visit_hits;
+  for (float& w : a.color_w) w = float(w * inv_visit);
   // One cell's colour, chosen in proportion to its hits by the footprint's shift.
   const float u = k::knit_frac(f.shift_x * 7 + f.shift_y * 3 + 0.5f) * float(visit_hits);
   for (int i = 0; i < npicks; ++i)
@@ -433,36 +498,23 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
   return a;
 }
 
-float FootprintTable::hit_fraction(int cls, const DirWeights& d) const {
-  const int slot = slot_[size_t(cls)];
-  if (slot < 0) return 0;  // not in the pattern (cannot happen for its own cells)
-  float h = 0;
-  for (int q = 0; q < 4; ++q)
-    h += d.w[size_t(q)] * stats_[size_t(slot) * kThetaBins * kPhiBins + size_t(d.node[size_t(q)])].hit;
-  // A convex combination of fractions, but the weights' float sum can
-  // exceed 1 by an ulp: 1 + 2^-23 of a fully covered direction made
-  // p_delta -1.2e-7, a negative shadow transmittance.
-  return std::clamp(h, 0.0f, 1.0f);
+float FootprintTable::pass_of(const std::array<double, kClasses>& counts, const DirWeights& dw) const {
+  double cells = 0, hits = 0;
+  for (int slot = 0; slot < slots_; ++slot) {
+    const double n = counts[size_t(class_of_slot_[size_t(slot)])];
+    if (!(n > 0)) continue;
+    cells += n;
+    hits += n * double(slot_hit_fraction(slot, dw));
+  }
+  return pass_fraction(hits, cells);
 }
 
 float FootprintTable::p_delta(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
   const DirWeights dw = dir_weights(wi);
-  double cells = 0, hits = 0;
-  std::array<double, kClasses> counts, cls_hits{};
-  if (class_counts(surface, f, counts)) {
-    counted_hits(counts, dw, cls_hits, cells, hits);
-    return pass_fraction(hits, cells);
-  }
-  // Only hit fractions: bilinear in direction, per class.
-  std::array<float, kClasses> hit;
-  hit.fill(-1);
-  for_each_cell(surface, f, [&](int cls, int, int) {
-    float& h = hit[size_t(cls)];
-    if (h < 0) h = hit_fraction(cls, dw);
-    cells += 1;
-    hits += h;
-  });
-  return pass_fraction(hits, cells);
+  std::array<double, kClasses> counts;
+  if (!class_counts(surface, f, counts))
+    for_each_cell(surface, f, [&](int cls, int, int) { counts[size_t(cls)] += 1; });
+  return pass_of(counts, dw);
 }
 
 }  // namespace knit

@@ -93,6 +93,9 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
   for (int i = 0; i < 64; ++i)
     for (int j = 0; j < 16; ++j) g += ply_.lookup(6.2831853f * (i + 0.5f) / 64, 0.37f * float(j)).shadow;
   mean_shadow_ = params_.ply_detail ? float(g / (64 * 16)) : 1.0f;
+  const YarnBsdfParams& bp = params_.bsdf;
+  unshaded_.spec_r = k::bsdf_mf_make(bp.roughness_x, bp.roughness_y, bp.eta);
+  unshaded_.spec_t = k::bsdf_mf_make(bp.trans_roughness_x, bp.trans_roughness_y, bp.eta);
   // Not for slip stitches: their floats cross cell boundaries and blend
   // with the loops beside them, which the classes do not describe (p_delta
   // off by up to 0.075 on heel stitch, docs/multiscale.md); those patterns
@@ -135,14 +138,6 @@ bool KnitMaterial::occluded_from(const BaseHit& hit, const KnitShade& from, Vec3
                                  const FrameProvider* frame) const {
   if (!from.in_shell || !params_.self_shadowing) return false;
   return march_from(hit, from, dir_world, frame, true).state == KNIT_CAPM_HIT;
-}
-
-KnitShade KnitMaterial::unshaded() const {
-  KnitShade sh;
-  const YarnBsdfParams& bp = params_.bsdf;
-  sh.spec_r = k::bsdf_mf_make(bp.roughness_x, bp.roughness_y, bp.eta);
-  sh.spec_t = k::bsdf_mf_make(bp.trans_roughness_x, bp.trans_roughness_y, bp.eta);
-  return sh;
 }
 
 KnitShade KnitMaterial::shade_from(const BaseHit& hit, const KnitShade& from, Vec3 dir_world,

@@ -27,6 +27,35 @@ double angle_between(const D3& a, const D3& b) {
   return std::acos(std::clamp(d, -1.0, 1.0)) * 180 / kPiD;
 }
 
+// The table's direction bins come from atan2_approx: against double
+// precision atan2 over every octant, the axes, near-axis and tiny arguments.
+TEST(FootprintTable, ApproximateAtan2IsWithin2e6OfDoublePrecision) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> ang(-3.2f, 3.2f), mag(-20.0f, 5.0f);
+  double worst = 0;
+  auto check = [&](float y, float x) {
+    const double ref = std::atan2(double(y), double(x));
+    const double got = atan2_approx(y, x);
+    ASSERT_TRUE(std::isfinite(got)) << y << " " << x;
+    // +-pi are the same direction; the cut sits on x < 0, y = 0.
+    double e = std::fabs(got - ref);
+    e = std::min(e, std::fabs(e - 2 * kPiD));
+    worst = std::max(worst, e);
+  };
+  for (int i = 0; i < 200000; ++i) {
+    const float a = ang(rng), r = std::exp2(mag(rng));
+    check(r * std::sin(a), r * std::cos(a));
+  }
+  for (float v : {1.0f, 1e-30f, 3e30f})
+    for (float y : {0.0f, v, -v})
+      for (float x : {0.0f, v, -v}) check(y, x);
+  check(1.0f, 1e-7f);
+  check(-1e-7f, -1.0f);
+  EXPECT_LT(worst, 2e-6);
+  EXPECT_EQ(atan2_approx(0.0f, 0.0f), 0.0f);
+  EXPECT_GT(worst, 0.0) << "an exact atan2 would not need this test";
+}
+
 TEST(FootprintTable, ClassesFollowCodeAndNeighbourSigns) {
   KnitSurface st(stockinette(), StitchParams{});
   EXPECT_EQ(FootprintTable::cell_class(st, 0, 0), 0);

@@ -37,6 +37,10 @@
 
 namespace knit {
 
+// atan2(y, x) in [-pi, pi] to within 2e-6 rad, a fraction of libm's cost
+// (the table's direction bins are 0.14 and 0.39 rad wide).
+float atan2_approx(float y, float x);
+
 class FootprintTable {
  public:
   static constexpr int kThetaBins = 24;  // nodes i pi / 23 over [0, pi] (both sides; none at the horizon)
@@ -63,9 +67,9 @@ class FootprintTable {
   static int cell_class(const KnitSurface& surface, int k, int c);
 
   size_t bytes() const {
-    return sizeof(*this) + stats_.size() * sizeof(Stats) + class_of_.size() + prefix_.size() * sizeof(uint16_t);
+    return sizeof(*this) + moments_.size() * sizeof(float) + class_of_.size() + prefix_.size() * sizeof(uint16_t);
   }
-  int classes_present() const;
+  int classes_present() const { return slots_; }
 
  private:
   struct Stats {
@@ -84,8 +88,30 @@ class FootprintTable {
     std::array<float, 4> w;
   };
   static DirWeights dir_weights(Vec3 wi_local);
-  Stats lookup(int cls, const DirWeights& d) const;
-  float hit_fraction(int cls, const DirWeights& d) const;  // lookup(cls, d).hit alone
+  // A node's statistics as the table keeps them, kMoments floats: the hit
+  // fraction, then the hit-conditioned means times the hit fraction (so
+  // that any mix of nodes and classes is one weighted sum, its hit-weighted
+  // means that sum over its hit fraction), then the unit mean tangent times
+  // the hit fraction.
+  enum Moment : int {
+    kHit = 0,
+    kNormal = 1,   // nx, ny, nz
+    kSlope = 4,    // sx, sy
+    kSlope2 = 6,   // sxx, sxy, syy
+    kLayers = 9,
+    kZ = 10,
+    kNear = 11,    // 9 shares, (dk + 1) * 3 + dc + 1
+    kLinear = 20,  // the moments above mix linearly
+    kTangent = 20, // tx, ty, tz (times hit): a line, mixed sign-aligned
+    kMoments = 24
+  };
+  const float* moments(int slot, int node) const {
+    return &moments_[(size_t(slot) * kThetaBins * kPhiBins + size_t(node)) * kMoments];
+  }
+  float hit_fraction(int cls, const DirWeights& d) const;  // bilinear in direction
+  float slot_hit_fraction(int slot, const DirWeights& d) const;  // the same by slot
+  // The shares of a class's hits on the 3 x 3 block around the cell, in direction d.
+  std::array<float, 9> near_shares(int cls, const DirWeights& d) const;
   // Visits (class, row, column) of the cells of f.
   template <class Visit>
   void for_each_cell(const KnitSurface& surface, const k::KFootprint& f, Visit&& visit) const;
@@ -100,13 +126,12 @@ class FootprintTable {
   // the pattern's rows for a box of any height) instead of a visit per cell;
   // false when there are no prefix counts (a pattern too large for them).
   bool class_counts(const KnitSurface& surface, const k::KFootprint& f, std::array<double, kClasses>& counts) const;
-  // Adds the counted cells to `cells`, their hits to `hits` and sets the
-  // hits by class, from the classes' hit fractions in direction d.
-  void counted_hits(const std::array<double, kClasses>& counts, const DirWeights& d,
-                    std::array<double, kClasses>& cls_hits, double& cells, double& hits) const;
+  // p_delta of cells counted by class (1 for none), seen from direction d.
+  float pass_of(const std::array<double, kClasses>& counts, const DirWeights& d) const;
 
-  std::array<int, kClasses> slot_{};  // index into stats_ blocks, -1 when the class is absent
-  std::vector<Stats> stats_;          // [slot][theta][phi]
+  std::array<int, kClasses> slot_{};  // index into moments_ blocks, -1 when the class is absent
+  int slots_ = 0;                     // classes present
+  std::vector<float> moments_;       // [slot][theta][phi][kMoments]
   std::vector<unsigned char> class_of_;  // class of each pattern cell, by knit_cell_index
   bool one_colour_ = true;               // every cell has colour index 0
   int single_class_ = -1;                // the class of every cell, when the pattern has one

@@ -120,7 +120,7 @@ class KnitMaterial {
   k::KnitCapm march_from(const BaseHit& hit, const KnitShade& from, Vec3 dir_world,
                          const FrameProvider* frame, bool blocked_only = false) const;
   // A shade with the material's unwidened specular lobes and no yarn yet.
-  KnitShade unshaded() const;
+  const KnitShade& unshaded() const { return unshaded_; }
   // Near-field shading at yarn hit h of a ray that met the base at `hit`.
   void shade_yarn(const BaseHit& hit, const k::KnitLineHit& h, const FrameProvider* frame, KnitShade& sh) const;
   // Points marched over a footprint spanned by fx, fy (pattern units).
@@ -136,6 +136,7 @@ class KnitMaterial {
   std::shared_ptr<const FootprintTable> table_;  // multi-scale with footprint_table: built at construction
   float arc_per_t_ = 1;     // mean arc length of the yarn per unit of curve parameter
   float mean_shadow_ = 1;   // ply shadow averaged around and along the yarn
+  KnitShade unshaded_;      // what unshaded() returns, set up once
 };
 
 }  // namespace knit
