@@ -1,8 +1,11 @@
 #include "render/render_job.h"
 
+#include <tbb/global_control.h>
+
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 
 #include "knit/version.h"
 #include "render/output.h"
@@ -19,6 +22,11 @@ double since(std::chrono::steady_clock::time_point t) {
 
 RenderJobResult run_render_job(const RenderJob& job, const std::function<void(const std::string&)>& warn) {
   const auto t_start = std::chrono::steady_clock::now();
+  // --threads bounds the whole job, not only the render: the class tables
+  // built while loading and the scene build run in parallel too.
+  std::unique_ptr<tbb::global_control> limit;
+  if (job.threads > 0)
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(job.threads));
   // Fail on a bad output name, folder or display before spending time on rendering.
   auto check_folder = [](const std::string& file, const char* what) {
     const std::filesystem::path parent = std::filesystem::path(file).parent_path();
