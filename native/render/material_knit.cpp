@@ -85,7 +85,11 @@ KnitModelMaterial::KnitModelMaterial(const KnitDesc& desc, std::shared_ptr<const
   }
   min_footprint_ = 1e-4f * model_->surface().cell_width();
   footprint_scale_ = desc.footprint_scale;
-  if (tables_.stretched > 0) {
+  // A stretch worth a warning: over 1% of the UV area, or by 1.5 or more
+  // anywhere. (A puffed cushion's corners, 0.1% of its UV area stretched by
+  // at most 17%, do not show; a warning there only teaches users to ignore
+  // warnings.)
+  if (tables_.stretched > 0 && (tables_.stretched_area >= 0.01 || tables_.worst_ratio >= 1.5f)) {
     char buf[160];
     std::snprintf(buf, sizeof buf,
                   "%zu of %zu triangles (%.1f%% of the UV area) have |dP/du| and |dP/dv| differing by more than "

@@ -103,6 +103,39 @@ TEST(KnitMesh, StretchedMeshWarnsOnce) {
   EXPECT_EQ(n, 1);
 }
 
+// Below 1% of the UV area and a ratio of 1.5 the stretch goes unmentioned;
+// a strong stretch of the same small patch warns. The mesh: a unit quad and
+// a 0.1 x 0.1 UV patch beside it (0.99% of the UV area), stretched along x.
+TEST(KnitMesh, SmallMildStretchesDoNotWarnStrongOnesDo) {
+  const std::string dir = test::test_dir();
+  auto count_warnings = [&](float stretch) {
+    char obj[512];
+    std::snprintf(obj, sizeof obj,
+                  "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                  "v 2 0 0\nv %g 0 0\nv %g 0.1 0\nv 2 0.1 0\n"
+                  "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvt 2 0\nvt 2.1 0\nvt 2.1 0.1\nvt 2 0.1\n"
+                  "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\nf 5/5 6/6 7/7\nf 5/5 7/7 8/8\n",
+                  2 + 0.1 * stretch, 2 + 0.1 * stretch);
+    test::write_file(dir, "patch.obj", obj);
+    const KnitMeshTables t = knit_mesh_tables(load_mesh(dir + "/patch.obj"), 30.0f);
+    EXPECT_EQ(t.stretched, 2u) << stretch;  // the counts still see both triangles
+    EXPECT_NEAR(t.worst_ratio, stretch, 1e-3f);
+    EXPECT_NEAR(t.stretched_area, 0.01 / 1.01, 1e-6);
+    const auto r = test::render_text(dir, R"({
+      "film": {"width": 8, "height": 8, "spp": 1},
+      "camera": {"position": [1, 0.5, 3], "look_at": [1, 0.5, 0]},
+      "lights": [{"type": "environment", "color": [1, 1, 1]}],
+      "materials": {"wool": {"type": "knit", "pattern": ["K"], "uv_scale": 30, "yarn_colors": [[0.5, 0.5, 0.5]]}},
+      "objects": [{"name": "p", "mesh": "patch.obj", "material": "wool"}]})");
+    int n = 0;
+    for (const std::string& m : r.warnings.messages)
+      if (m.find("differing by more than 10%") != std::string::npos) ++n;
+    return n;
+  };
+  EXPECT_EQ(count_warnings(1.2f), 0);
+  EXPECT_EQ(count_warnings(1.6f), 1);
+}
+
 TEST(YarnTubes, FlatQuadPlacesTheExactCurvesBelowTheMesh) {
   // quad.obj: 1 x 1 in the xy plane facing +z, UV = position + 0.5.
   const TriangleMesh quad = load_mesh(mesh("quad.obj"));
