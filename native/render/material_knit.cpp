@@ -127,6 +127,7 @@ knit::BaseHit KnitModelMaterial::base_hit(const SurfaceInteraction& si, float di
   h.pattern_per_world = tri.pattern_per_world;
   h.kx = tri.kx;
   h.ky = tri.ky;
+  h.frame_hint = static_cast<int64_t>(prim);  // frame_ is this mesh's: its lookups start in the triangle hit
   if (si.footprint.valid && diff_scale > 0) {
     const float k = footprint_scale_ / diff_scale;
     h.dudx = si.footprint.dudx * k;

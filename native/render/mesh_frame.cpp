@@ -85,7 +85,8 @@ size_t MeshFrame::memory_bytes() const {
 
 int64_t MeshFrame::triangle_at(Vec2 uv, float& b1, float& b2, bool& inside, int64_t* hint) const {
   // A march's lookups mostly stay in one triangle: try the last one first.
-  if (hint && *hint >= 0 && grid_->barycentrics(static_cast<size_t>(*hint), uv, b1, b2)) {
+  if (hint && *hint >= 0 && static_cast<size_t>(*hint) < mesh_->num_triangles() &&
+      grid_->barycentrics(static_cast<size_t>(*hint), uv, b1, b2)) {
     inside = true;
     return *hint;
   }

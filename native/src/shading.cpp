@@ -159,7 +159,7 @@ KnitShade KnitMaterial::shade_from(const BaseHit& hit, const KnitShade& from, Ve
 k::KnitCapm KnitMaterial::march_state(const BaseHit& hit, const k::KnitCapm& start, Vec3 ray_dir,
                                       const FrameProvider* frame, bool blocked_only) const {
   const float x = params_.uv_scale * hit.u, y = params_.uv_scale * hit.v;
-  if (frame) return surface_.march(start, ray_dir, frame, params_.capm_options, blocked_only);
+  if (frame) return surface_.march(start, ray_dir, frame, params_.capm_options, blocked_only, hit.frame_hint);
   const float S = hit.pattern_per_world;
   const float kx = hit.kx / S, ky = hit.ky / S;
   const float kmax = std::max(std::abs(kx), std::abs(ky));

@@ -113,6 +113,20 @@ TEST(MeshFrame, HintedLookupsMatchUnhintedOnes) {
     hints.insert(hint);
   }
   EXPECT_GT(hints.size(), 50u);  // the hint followed the path across triangles
+  // A caller's starting hint (BaseHit::frame_hint) that is wrong, or names
+  // no triangle at all, costs only the ordinary lookup.
+  for (int64_t start : {int64_t(0), int64_t(mesh->num_triangles()) - 1, int64_t(mesh->num_triangles()),
+                        int64_t(mesh->num_triangles()) + 1000, int64_t(1) << 40})
+    for (float px : {3.0f, 31.0f, 60.0f}) {
+      knit::Vec3 t0, b0, n0, t1, b1, n1;
+      f.frame(px, 20.0f, t0, b0, n0);
+      int64_t h = start;
+      f.frame_near(px, 20.0f, h, t1, b1, n1);
+      EXPECT_LT(length(v3(t1) - v3(t0)) + length(v3(b1) - v3(b0)) + length(v3(n1) - v3(n0)), 1e-5f)
+          << "hint " << start << " at x " << px;
+      EXPECT_GE(h, 0);
+      EXPECT_LT(h, int64_t(mesh->num_triangles()));  // now the triangle found
+    }
 }
 
 TEST(MeshFrame, MirroredUvsGiveABitangentAlongPlusV) {

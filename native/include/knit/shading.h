@@ -13,6 +13,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <memory>
 
 #include "knit/aggregate_table.h"
@@ -49,6 +50,9 @@ struct BaseHit {
   float kx = 0, ky = 0;               // normal curvature along t and b (1 / world units; > 0 convex)
   // Footprint of the pixel in UV (multi-scale): (du/dx, dv/dx), (du/dy, dv/dy).
   float dudx = 0, dvdx = 0, dudy = 0, dvdy = 0;
+  // Where a FrameProvider's lookups near (u, v) may start (FrameProvider::
+  // frame_near's hint: for a mesh, the triangle hit); -1 when unknown.
+  int64_t frame_hint = -1;
 };
 
 struct KnitShade {

@@ -6,6 +6,7 @@
 // fabric's base surface is z = 0; yarn tubes live in |z| <= shell_top().
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -115,8 +116,10 @@ class KnitSurface {
   // (KNIT_QUERY_ANY), and a hit ends the march as found, without the
   // midpoint corrector that places it (knit_capm_correct: one more line
   // query per hit on a curved base). The state's hit is then only a hit.
+  // frame_hint: where the frame lookups may start (FrameProvider::frame_near;
+  // BaseHit::frame_hint), -1 when unknown.
   k::KnitCapm march(k::KnitCapm start, Vec3 ray_world, const FrameProvider* frame,
-                    const CapmOptions& opt = {}, bool blocked_only = false) const;
+                    const CapmOptions& opt = {}, bool blocked_only = false, int64_t frame_hint = -1) const;
   SurfaceHit to_hit(const k::KnitCapm& st) const;
 
   // The kernel's view of this surface (for hosts that call the kernel directly).
