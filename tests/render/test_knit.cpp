@@ -9,6 +9,8 @@
 #include <cstdio>
 #include <cstring>
 #include <functional>
+#include <string>
+#include <vector>
 
 #include "knit/yarns.h"
 #include "render/curve_shape.h"
@@ -81,26 +83,33 @@ TEST(KnitMesh, FlatQuadAndAStretchedMesh) {
   EXPECT_NEAR(w.triangles[1].pattern_per_world, 40.0f / std::sqrt(2.0f), 1e-3f);
 }
 
+// The UV-stretch warnings of a render of `mesh` (in dir) as one knit object
+// "w", the camera 3 units in front of (cx, cy, 0).
+std::vector<std::string> stretch_warnings(const std::string& dir, const std::string& mesh, float cx, float cy) {
+  char scene[1024];
+  std::snprintf(scene, sizeof scene, R"({
+    "film": {"width": 8, "height": 8, "spp": 1},
+    "camera": {"position": [%g, %g, 3], "look_at": [%g, %g, 0]},
+    "lights": [{"type": "environment", "color": [1, 1, 1]}],
+    "materials": {"wool": {"type": "knit", "pattern": ["K"], "uv_scale": 30, "yarn_colors": [[0.5, 0.5, 0.5]]}},
+    "objects": [{"name": "w", "mesh": "%s", "material": "wool"}]})",
+                cx, cy, cx, cy, mesh.c_str());
+  std::vector<std::string> out;
+  for (const std::string& m : test::render_text(dir, scene).warnings.messages)
+    if (m.find("differing by more than 10%") != std::string::npos) out.push_back(m);
+  return out;
+}
+
 TEST(KnitMesh, StretchedMeshWarnsOnce) {
   const std::string dir = test::test_dir();
   test::write_file(dir, "wide.obj",
                    "v -1 -0.5 0\nv 1 -0.5 0\nv 1 0.5 0\nv -1 0.5 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
                    "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n");
-  const auto r = test::render_text(dir, R"({
-    "film": {"width": 8, "height": 8, "spp": 1},
-    "camera": {"position": [0, 0, 3], "look_at": [0, 0, 0]},
-    "lights": [{"type": "environment", "color": [1, 1, 1]}],
-    "materials": {"wool": {"type": "knit", "pattern": ["K"], "uv_scale": 30, "yarn_colors": [[0.5, 0.5, 0.5]]}},
-    "objects": [{"name": "w", "mesh": "wide.obj", "material": "wool"}]})");
-  int n = 0;
-  for (const std::string& m : r.warnings.messages)
-    if (m.find("differing by more than 10%") != std::string::npos) {
-      ++n;
-      EXPECT_NE(m.find("objects[0] (w)"), std::string::npos) << m;
-      EXPECT_NE(m.find("2 of 2 triangles (100.0% of the UV area)"), std::string::npos) << m;
-      EXPECT_NE(m.find("materials.wool"), std::string::npos) << m;
-    }
-  EXPECT_EQ(n, 1);
+  const std::vector<std::string> w = stretch_warnings(dir, "wide.obj", 0, 0);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("objects[0] (w)"), std::string::npos) << w[0];
+  EXPECT_NE(w[0].find("2 of 2 triangles (100.0% of the UV area)"), std::string::npos) << w[0];
+  EXPECT_NE(w[0].find("materials.wool"), std::string::npos) << w[0];
 }
 
 // Below 1% of the UV area and a ratio of 1.5 the stretch goes unmentioned;
@@ -121,19 +130,10 @@ TEST(KnitMesh, SmallMildStretchesDoNotWarnStrongOnesDo) {
     EXPECT_EQ(t.stretched, 2u) << stretch;  // the counts still see both triangles
     EXPECT_NEAR(t.worst_ratio, stretch, 1e-3f);
     EXPECT_NEAR(t.stretched_area, 0.01 / 1.01, 1e-6);
-    const auto r = test::render_text(dir, R"({
-      "film": {"width": 8, "height": 8, "spp": 1},
-      "camera": {"position": [1, 0.5, 3], "look_at": [1, 0.5, 0]},
-      "lights": [{"type": "environment", "color": [1, 1, 1]}],
-      "materials": {"wool": {"type": "knit", "pattern": ["K"], "uv_scale": 30, "yarn_colors": [[0.5, 0.5, 0.5]]}},
-      "objects": [{"name": "p", "mesh": "patch.obj", "material": "wool"}]})");
-    int n = 0;
-    for (const std::string& m : r.warnings.messages)
-      if (m.find("differing by more than 10%") != std::string::npos) ++n;
-    return n;
+    return stretch_warnings(dir, "patch.obj", 1, 0.5f).size();
   };
-  EXPECT_EQ(count_warnings(1.2f), 0);
-  EXPECT_EQ(count_warnings(1.6f), 1);
+  EXPECT_EQ(count_warnings(1.2f), 0u);
+  EXPECT_EQ(count_warnings(1.6f), 1u);
 }
 
 TEST(YarnTubes, FlatQuadPlacesTheExactCurvesBelowTheMesh) {
