@@ -125,8 +125,11 @@ KNIT_FN KFootprint knit_footprint(KNIT_IN(KnitGeom) g, float x, float y, kvec3 f
   f.by0 = KINT(k_floor(y / ch - KF(0.5) * KFLT(f.ncy) + KF(0.5)));
   f.n = k_maxi(1, k_mini(n_points, KNIT_MS_MAX_POINTS));
   if (f.stratified != 0) {
+    /* n_points per 16 cells, at most KNIT_MS_MAX_POINTS: the factor is capped
+     * before the product, which overflowed an int for boxes of 10^10 cells. */
     float cells = KFLT(f.ncx) * KFLT(f.ncy);
-    f.n = k_mini(KNIT_MS_MAX_POINTS, f.n * k_maxi(1, KINT(k_ceil(cells / KF(16.0)))));
+    int per16 = KINT(k_ceil(k_fmin(cells / KF(16.0), KFLT(KNIT_MS_MAX_POINTS))));
+    f.n = k_mini(KNIT_MS_MAX_POINTS, f.n * k_maxi(1, per16));
   }
   return f;
 }
