@@ -255,6 +255,9 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
     float* m = &moments_[i * kMoments];
     const float h = st.hit;
     m[kHit] = h;
+    static_assert(kSlope == kNormal + 3 && kSlope2 == kSlope + 2 && kLayers == kSlope2 + 3 && kZ == kLayers + 1 &&
+                      kNear == kZ + 1 && kNear + 9 == kLinear && kTangent + 3 < kMoments,
+                  "the moments in the order of `means`");
     const float means[] = {st.nx, st.ny, st.nz, st.sx, st.sy, st.sxx, st.sxy, st.syy, st.layers, st.z};
     for (int q = 0; q < 10; ++q) m[kNormal + q] = h * means[q];
     for (int q = 0; q < 9; ++q) m[kNear + q] = h * st.near[q];
