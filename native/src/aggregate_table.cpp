@@ -65,63 +65,9 @@ float pass_fraction(double hits, double cells) {
   return cells > 0 ? std::clamp(float(1 - hits / cells), 0.0f, 1.0f) : 1.0f;
 }
 
-
-// A weighted mix of hit-conditioned statistics (weights: share x hit
-// fraction); the tangents, lines rather than arrows, are sign-aligned.
-template <class S>
-class StatsMix {
- public:
-  void add(const S& s, float w) {
-    if (!(w > 0)) return;
-    wsum_ += w;
-    acc_.nx += w * s.nx;
-    acc_.ny += w * s.ny;
-    acc_.nz += w * s.nz;
-    const Vec3 t = k::kv3_scale(k::kv3(s.tx, s.ty, s.tz), w);
-    tsum_ = k::kv3_dot(tsum_, t) < 0 ? k::kv3_sub(tsum_, t) : k::kv3_add(tsum_, t);
-    acc_.sx += w * s.sx;
-    acc_.sy += w * s.sy;
-    acc_.sxx += w * s.sxx;
-    acc_.sxy += w * s.sxy;
-    acc_.syy += w * s.syy;
-    acc_.layers += w * s.layers;
-    acc_.z += w * s.z;
-    for (int q = 0; q < 9; ++q) acc_.near[q] += w * s.near[q];
-  }
-  // The mix, with hit fraction `hit` (defaults when nothing was added).
-  S result(float hit) const {
-    S out;
-    out.hit = hit;
-    if (!(wsum_ > 0)) return out;
-    const float inv = 1 / wsum_;
-    out.nx = acc_.nx * inv;
-    out.ny = acc_.ny * inv;
-    out.nz = acc_.nz * inv;
-    const Vec3 t = k::kv3_normalize(tsum_);
-    out.tx = t.x;
-    out.ty = t.y;
-    out.tz = t.z;
-    out.sx = acc_.sx * inv;
-    out.sy = acc_.sy * inv;
-    out.sxx = acc_.sxx * inv;
-    out.sxy = acc_.sxy * inv;
-    out.syy = acc_.syy * inv;
-    out.layers = acc_.layers * inv;
-    out.z = acc_.z * inv;
-    for (int q = 0; q < 9; ++q) out.near[q] = acc_.near[q] * inv;
-    return out;
-  }
-
- private:
-  S acc_ = zero();
-  Vec3 tsum_ = k::kv3(0, 0, 0);
-  float wsum_ = 0;
-  static S zero() {
-    S z;
-    z.nz = z.tx = 0;
-    return z;
-  }
-};
+// Adds tangent t to a sum of tangents: lines, not arrows, so t is turned
+// to the side of the sum so far.
+Vec3 add_line(Vec3 sum, Vec3 t) { return k::kv3_dot(sum, t) < 0 ? k::kv3_sub(sum, t) : k::kv3_add(sum, t); }
 
 }  // namespace
 
@@ -201,8 +147,7 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
         n[0] += st.hit.n.x;
         n[1] += st.hit.n.y;
         n[2] += st.hit.n.z;
-        tsum = k::kv3_dot(tsum, st.hit.tangent) < 0 ? k::kv3_sub(tsum, st.hit.tangent)
-                                                     : k::kv3_add(tsum, st.hit.tangent);
+        tsum = add_line(tsum, st.hit.tangent);
         const Vec3 sl = k::knit_ms_slopes(st.hit.n, side);  // as knit_aggregate takes them
         const float bx = sl.x, by = sl.y;
         sx += bx;
@@ -237,18 +182,6 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
       }
     }
   });
-  // The rows at theta = 0 and pi are one direction each: their columns,
-  // marched with different points, are averaged.
-  for (int slot = 0; slot < slots; ++slot)
-    for (int it : {0, kThetaBins - 1}) {
-      Stats* row = &stats[(size_t(slot) * kThetaBins + size_t(it)) * kPhiBins];
-      double hit = 0;
-      for (int ip = 0; ip < kPhiBins; ++ip) hit += row[ip].hit;
-      StatsMix<Stats> mix;
-      for (int ip = 0; ip < kPhiBins; ++ip) mix.add(row[ip], row[ip].hit);
-      const Stats avg = mix.result(float(hit / kPhiBins));
-      for (int ip = 0; ip < kPhiBins; ++ip) row[ip] = avg;
-    }
   moments_.resize(stats.size() * kMoments);
   for (size_t i = 0; i < stats.size(); ++i) {
     const Stats& st = stats[i];
@@ -266,6 +199,26 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
     m[kTangent + 2] = h * st.tz;
     m[kTangent + 3] = 0;
   }
+  // The rows at theta = 0 and pi are one direction each: their columns,
+  // marched with different points, are averaged (the moments mix linearly;
+  // the tangent is the sign-aligned mean's direction times the mean hit
+  // fraction).
+  for (int slot = 0; slot < slots; ++slot)
+    for (int it : {0, kThetaBins - 1}) {
+      float* row = &moments_[(size_t(slot) * kThetaBins + size_t(it)) * kPhiBins * kMoments];
+      std::array<float, kMoments> avg{};
+      Vec3 tsum = k::kv3(0, 0, 0);
+      for (int ip = 0; ip < kPhiBins; ++ip) {
+        const float* m = row + size_t(ip) * kMoments;
+        add_scaled<kLinear>(avg.data(), m, 1.0f / kPhiBins);
+        tsum = add_line(tsum, k::kv3(m[kTangent], m[kTangent + 1], m[kTangent + 2]));
+      }
+      const Vec3 t = k::kv3_scale(k::kv3_normalize(tsum), avg[kHit]);
+      avg[kTangent] = t.x;
+      avg[kTangent + 1] = t.y;
+      avg[kTangent + 2] = t.z;
+      for (int ip = 0; ip < kPhiBins; ++ip) std::copy(avg.begin(), avg.end(), row + size_t(ip) * kMoments);
+    }
 }
 
 FootprintTable::DirWeights FootprintTable::dir_weights(Vec3 wi) {
@@ -447,7 +400,7 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
         add_scaled<kLinear>(sum.data(), m, w);
         // Tangents are lines, not arrows: sign-aligned with the sum so far.
         const Vec3 t = k::kv3_scale(k::kv3(m[kTangent], m[kTangent + 1], m[kTangent + 2]), w);
-        tsum = k::kv3_dot(tsum, t) < 0 ? k::kv3_sub(tsum, t) : k::kv3_add(tsum, t);
+        tsum = add_line(tsum, t);
       }
     }
   }

@@ -30,9 +30,10 @@ class FrameProvider {
   // the points start, e.g. the mesh triangle a ray hit: BaseHit::frame_hint),
   // and a provider may keep in it where the last point was found (a mesh
   // triangle) and look there first; a hint that does not hold the point, or
-  // names no place, only costs the ordinary lookup. The result may differ from frame()'s only where the point lies on
-  // the border of two places within rounding; it depends on the sequence of
-  // lookups made with that hint, never on other threads.
+  // names no place, only costs the ordinary lookup. The result may differ
+  // from frame()'s only where the point lies on the border of two places
+  // within rounding; it depends on the sequence of lookups made with that
+  // hint, never on other threads.
   virtual void frame_near(float x, float y, int64_t& /*hint*/, Vec3& t, Vec3& b, Vec3& n) const {
     frame(x, y, t, b, n);
   }
