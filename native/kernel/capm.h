@@ -84,6 +84,19 @@ KNIT_FN float knit_capm_segment(KNIT_IN(KnitGeom) g, KNIT_IN(KnitCapm) st, float
   return k_fmax(len, KF(0.0));
 }
 
+/* The segment of length len along st.D in pattern units (tangential travel
+ * shrinks by the metric at mid-segment height; kx, ky: base curvature, 0
+ * when unknown): KX..KZ of the result's direction times its length lp, i.e.
+ * the segment is st.p + u dp, u in [0, len]. */
+KNIT_FN kvec3 knit_capm_pattern_step(KNIT_IN(KnitCapm) st, float len, float kx, float ky) {
+  float dz = KZ(st.D);
+  float z = KZ(st.p) + len * dz;
+  float zm = KF(0.5) * (KZ(st.p) + z); /* metric at mid-segment height */
+  float mx = KF(1.0) / k_fmax(KF(1.0) + kx * zm, KF(0.1));
+  float my = KF(1.0) / k_fmax(KF(1.0) + ky * zm, KF(0.1));
+  return kv3(KX(st.D) * mx, KY(st.D) * my, dz);
+}
+
 /* One segment of length len along st.D (see knit_capm_segment); kx, ky: base
  * curvature for the metric (0 when unknown). any_hit != 0: a hit need only
  * be a hit, not the nearest (KNIT_QUERY_ANY, for shadow rays). */
@@ -93,12 +106,7 @@ KNIT_FN KnitCapm knit_capm_step_len(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
   KnitCapm st = in;
   float dz = KZ(st.D);
   float eps = KF(1.0e-4) * g.shell_top;
-  float z = KZ(st.p) + len * dz;
-  float zm = KF(0.5) * (KZ(st.p) + z); /* metric at mid-segment height */
-  float mx = KF(1.0) / k_fmax(KF(1.0) + kx * zm, KF(0.1));
-  float my = KF(1.0) / k_fmax(KF(1.0) + ky * zm, KF(0.1));
-  /* The segment in pattern units: tangential travel shrinks by the metric. */
-  kvec3 dp = kv3(KX(st.D) * mx, KY(st.D) * my, dz);
+  kvec3 dp = knit_capm_pattern_step(st, len, kx, ky);
   float lp = kv3_len(dp);
   KnitLineHit h;
   if (st.state != KNIT_CAPM_MARCHING) return st;
@@ -143,7 +151,17 @@ KNIT_FN KnitCapm knit_capm_aim(KNIT_IN(KnitCapm) in, kvec3 dir_local) {
  * knit_capm_hit_midpoint(before, hit) and passes the ray's direction in it;
  * the segment is then re-marched to just past the hit with that direction,
  * which is right to second order in the (shorter) distance to the hit. The
- * original hit is kept if the re-marched segment misses. */
+ * original hit is kept if the re-marched segment misses.
+ *
+ * The corrected ray differs from the first by the frame's turn over half
+ * the distance to the hit (a few hundredths of a radian at most, with the
+ * segment length bounded by max_bend), so it enters the same tube a little
+ * further on: that crossing is refined from the first entry (the entry's
+ * Newton search, knit_crossing, on that row's curve: a fraction of a line
+ * query). The whole segment is queried again only when the refined entry
+ * is not in the segment or moved by more than the tube radius; a tube met
+ * first only by the corrected ray would lie within that turn of the first
+ * ray's silhouette. */
 KNIT_FN kvec3 knit_capm_hit_midpoint(KNIT_IN(KnitCapm) before, KNIT_IN(KnitCapm) hit) {
   return kv3_madd(before.p, before.D, KF(0.5) * k_fmax(hit.hit.s_in, KF(0.0)));
 }
@@ -153,6 +171,19 @@ KNIT_FN KnitCapm knit_capm_correct(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), 
   KnitCapm again = knit_capm_aim(before, dir_local);
   float len = k_fmin(knit_capm_segment(g, again, max_segment),
                      KF(1.5) * k_fmax(hit.hit.s_in, KF(0.0)) + g.r);
+  kvec3 dp = knit_capm_pattern_step(again, len, kx, ky);
+  float lp = kv3_len(dp);
+  if (again.state == KNIT_CAPM_MARCHING && lp > KF(0.0)) {
+    kvec3 D = kv3_scale(dp, KF(1.0) / lp);
+    KSpan sp = knit_span(g, codes, knit_row(g, hit.hit.row), knit_column_of(hit.hit.t));
+    KnitLineHit h = knit_crossing(g, codes, colors, sp, again.p, D, hit.hit.t, 0);
+    if (h.hit != 0 && h.s_in >= KF(0.0) && h.s_in <= len * lp && k_fabs(h.s_in - hit.hit.s_in) <= g.r) {
+      again.state = KNIT_CAPM_HIT;
+      again.hit = h;
+      again.steps = hit.steps;
+      return again;
+    }
+  }
   again = knit_capm_step_len(g, codes, colors, again, len, hit.steps + 1, kx, ky, 0);
   if (again.state != KNIT_CAPM_HIT) return hit;
   again.steps = hit.steps;

@@ -232,3 +232,73 @@ TEST(GroundTruth, BlockedOnlyMarchAgreesWithTheFullMarch) {
 }
 
 }  // namespace
+
+namespace {
+
+// The hit corrector on a curved base refines the first segment's crossing
+// from its entry instead of querying the whole segment again
+// (k::knit_capm_correct). Against that full re-query, for first segments that
+// hit on a tight and a loose cylinder, all directions from the normal to
+// grazing: the same tube, and an entry at least as close to the converged
+// entry of that tube (Newton's search for the entry repeated from where it
+// stopped until it no longer moves), within 1% of the radius on all but a
+// few rays grazing a tube. (Accuracy against the explicit tubes is
+// CapmCylinder and CapmTightCylinder's.)
+TEST(GroundTruth, RefinedCorrectorAgreesWithTheRequeriedSegment) {
+  using namespace knit;
+  KnitSurface s(test::seed(), StitchParams{});
+  const k::KnitGeom& g = s.geom();
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> U(0, 1);
+  for (const float R : {12.0f, 50.0f}) {
+    const CapmOptions opt;
+    const float seg = std::min(opt.max_segment, opt.max_bend * R), kx = 1 / R;
+    int hits = 0, same_tube = 0, refined_close = 0, requery_close = 0;
+    const int n = 6000;
+    for (int i = 0; i < n; ++i) {
+      const float x = 40 * U(rng), y = 40 * U(rng), th = 1.5f * std::sqrt(U(rng)), ph = 6.283f * U(rng);
+      const k::kvec3 wi = k::kv3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
+      const k::kvec3 d0 = k::kv3_neg(wi);
+      k::KnitCapm st = k::knit_capm_start(g, x, y, wi);
+      const k::kvec3 m = k::knit_capm_midpoint(g, st, seg);
+      st = k::knit_capm_aim(st, k::knit_curved_frame_dir(d0, kx, 0, m.x - x, m.y - y));
+      const k::KnitCapm before = st;
+      st = k::knit_capm_step(g, s.codes(), s.colors(), st, seg, opt.max_steps, kx, 0, 0);
+      if (st.state != KNIT_CAPM_HIT) continue;
+      ++hits;
+      const k::kvec3 mh = k::knit_capm_hit_midpoint(before, st);
+      const k::kvec3 dir = k::knit_curved_frame_dir(d0, kx, 0, mh.x - x, mh.y - y);
+      const k::KnitCapm refined = k::knit_capm_correct(g, s.codes(), s.colors(), before, st, dir, seg, kx, 0);
+      ASSERT_EQ(refined.state, KNIT_CAPM_HIT);  // a corrected hit stays a hit
+      ASSERT_EQ(refined.steps, st.steps);
+      // The full re-query, as the corrector did before it refined.
+      k::KnitCapm again = k::knit_capm_aim(before, dir);
+      const float len = std::min(k::knit_capm_segment(g, again, seg), 1.5f * std::max(st.hit.s_in, 0.0f) + g.r);
+      const k::kvec3 dp = k::knit_capm_pattern_step(again, len, kx, 0);
+      const k::kvec3 D = k::kv3_normalize(dp);
+      again = k::knit_capm_step_len(g, s.codes(), s.colors(), again, len, st.steps + 1, kx, 0, 0);
+      const k::KnitLineHit& want = again.state == KNIT_CAPM_HIT ? again.hit : st.hit;
+      if (refined.hit.row != want.row || refined.hit.col != want.col) continue;
+      ++same_tube;
+      // That tube's converged entry along the re-queried ray.
+      const k::KSpan sp = k::knit_span(g, s.codes(), k::knit_row(g, want.row), k::knit_column_of(want.t));
+      k::KnitLineHit conv = want;
+      for (int it = 0; it < 8; ++it) {
+        const k::KnitLineHit next = k::knit_crossing(g, s.codes(), s.colors(), sp, before.p, D, conv.t, 0);
+        if (!next.hit) break;
+        conv = next;
+      }
+      refined_close += k::kv3_len(k::kv3_sub(refined.hit.p, conv.p)) < 0.01f * g.r;
+      requery_close += k::kv3_len(k::kv3_sub(want.p, conv.p)) < 0.01f * g.r;
+    }
+    std::printf("[ corrector ] R = %.0f: %d first-segment hits; refined on the re-queried tube %d; entry within "
+                "0.01 r of the converged one: refined %d, re-queried %d\n",
+                R, hits, same_tube, refined_close, requery_close);
+    EXPECT_GT(hits, n / 3) << "R = " << R;
+    EXPECT_GE(same_tube, hits * 998 / 1000) << "R = " << R;
+    EXPECT_GE(refined_close, same_tube * 99 / 100) << "R = " << R;
+    EXPECT_GE(refined_close, requery_close) << "R = " << R;
+  }
+}
+
+}  // namespace
