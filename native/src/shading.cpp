@@ -337,7 +337,8 @@ void KnitMaterial::shade_yarn(const BaseHit& hit, const k::KnitLineHit& h, const
   // Base frame at the yarn hit.
   Vec3 ft = hit.t, fb = hit.b, fn = hit.n;
   if (frame) {
-    frame->frame(h.p.x, h.p.y, ft, fb, fn);
+    int64_t hint = hit.frame_hint;  // the yarn hit lies near the base hit
+    frame->frame_near(h.p.x, h.p.y, hint, ft, fb, fn);
   } else if (hit.kx != 0 || hit.ky != 0) {
     curved_frame(hit.t, hit.b, hit.n, hit.kx / S, hit.ky / S, h.p.x - x, h.p.y - y, ft, fb, fn);
   }

@@ -38,6 +38,9 @@ class FrameProvider {
     frame(x, y, t, b, n);
   }
   virtual Vec3 curvature_near(float x, float y, int64_t& /*hint*/) const { return curvature(x, y); }
+  // True when the frame is the same everywhere (a flat base): a march then
+  // neither looks it up nor bends the ray.
+  virtual bool is_flat() const { return false; }
 };
 
 }  // namespace knit

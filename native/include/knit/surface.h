@@ -43,6 +43,7 @@ struct SurfaceHit {
 class FlatFrame final : public FrameProvider {
  public:
   void frame(float, float, Vec3& t, Vec3& b, Vec3& n) const override;
+  bool is_flat() const override { return true; }
 };
 
 // A cylinder of radius R (pattern units) around the y axis: x is arc length
