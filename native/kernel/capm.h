@@ -176,7 +176,7 @@ KNIT_FN KnitCapm knit_capm_correct(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), 
   if (again.state == KNIT_CAPM_MARCHING && lp > KF(0.0)) {
     kvec3 D = kv3_scale(dp, KF(1.0) / lp);
     KSpan sp = knit_span(g, codes, knit_row(g, hit.hit.row), knit_column_of(hit.hit.t));
-    KnitLineHit h = knit_crossing(g, codes, colors, sp, again.p, D, hit.hit.t, 0);
+    KnitLineHit h = knit_crossing(g, codes, colors, sp, again.p, D, hit.hit.t, 0, KF(0.0));
     if (h.hit != 0 && h.s_in >= KF(0.0) && h.s_in <= len * lp && k_fabs(h.s_in - hit.hit.s_in) <= g.r) {
       again.state = KNIT_CAPM_HIT;
       again.hit = h;

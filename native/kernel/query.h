@@ -192,24 +192,32 @@ KNIT_STRUCT(KExtreme)
   float t;
   KCurve cv;
   KLineRel lr;
+  int capped;  /* the search stopped above f_cap (knit_newton_extreme) */
 KNIT_STRUCT_END(KExtreme)
 
 /* Maximise sgn * s(t) + w(t), w = sqrt(r^2 - rho^2): sgn = -1 gives the entry,
  * +1 the exit. Safeguarded Newton: a step that leaves the tube (rho >= r) or
  * lowers the objective is halved. Returns the last point evaluated (rho may be
- * >= r when t_start was outside the tube). */
+ * >= r when t_start was outside the tube). The objective only grows, so once
+ * it exceeds f_cap the result would too: the search stops there with
+ * capped = 1 (K_BIG: never). */
 KNIT_FN KExtreme knit_newton_extreme(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KSpan) sp, kvec3 o, kvec3 D,
-                                     float t_start, float sgn, int iters) {
+                                     float t_start, float sgn, int iters, float f_cap) {
   KExtreme e;
   float r2 = g.r * g.r;
   int i;
   e.t = t_start;
+  e.capped = 0;
   e.cv = knit_span_curve_at(g, codes, sp, e.t);
   e.lr = knit_line_rel(e.cv, o, D);
   if (e.lr.rho2 >= r2) return e;
   for (i = 0; i < iters; i++) {
     float w = k_sqrt(r2 - e.lr.rho2);
     float f = sgn * e.lr.s + w;
+    if (f > f_cap) {
+      e.capped = 1;
+      return e;
+    }
     float f1 = sgn * e.lr.sd1 - e.lr.phi1 / w;
     float f2 = sgn * e.lr.sd2 - e.lr.phi2 / w - e.lr.phi1 * e.lr.phi1 / (w * w * w);
     float step;
@@ -239,16 +247,23 @@ KNIT_FN KExtreme knit_newton_extreme(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes)
 /* The crossing of span sp's row tube found from curve parameter t_close
  * (the exact curve's point closest to the line, knit_piece_closest_t).
  * Fills s_in, s_out, t, p, n, tangent, row, col, code, color; hit = 1 when
- * the line does pass through the tube. */
+ * the line does pass through the tube. Without the exit (need_exit = 0),
+ * a crossing whose entry is sure to come before s_floor is not searched
+ * for and reported as a miss: every point the search passes bounds the
+ * entry from above (s_in <= s(t) - w(t), the entry maximising w - s), so
+ * it stops once that bound is below s_floor (-K_BIG: never). A start
+ * point on or inside a tube, the next step of a path, thus skips that
+ * tube's crossing behind it. */
 KNIT_FN KnitLineHit knit_crossing(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
-                                  KNIT_IN(KSpan) sp, kvec3 o, kvec3 D, float t_close, int need_exit) {
+                                  KNIT_IN(KSpan) sp, kvec3 o, kvec3 D, float t_close, int need_exit, float s_floor) {
   KnitLineHit h = knit_line_hit_none();
   float r2 = g.r * g.r;
-  KExtreme ein = knit_newton_extreme(g, codes, sp, o, D, t_close, KF(-1.0), KNIT_NEWTON_EXTREME);
+  KExtreme ein = knit_newton_extreme(g, codes, sp, o, D, t_close, KF(-1.0), KNIT_NEWTON_EXTREME,
+                                     need_exit != 0 ? K_BIG : -s_floor);
   int c, ci;
-  if (ein.lr.rho2 >= r2) return h;
+  if (ein.lr.rho2 >= r2 || ein.capped != 0) return h;
   if (need_exit != 0) {
-    KExtreme eout = knit_newton_extreme(g, codes, sp, o, D, t_close, KF(1.0), KNIT_NEWTON_EXTREME);
+    KExtreme eout = knit_newton_extreme(g, codes, sp, o, D, t_close, KF(1.0), KNIT_NEWTON_EXTREME, K_BIG);
     if (eout.lr.rho2 >= r2) return h;
     h.s_out = eout.lr.s + k_sqrt(r2 - eout.lr.rho2);
   }
@@ -418,7 +433,8 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
         }
         continue;
       }
-      h = knit_crossing(g, codes, colors, sp, o, D, t, mode == KNIT_QUERY_EXIT ? 1 : 0);
+      h = knit_crossing(g, codes, colors, sp, o, D, t, mode == KNIT_QUERY_EXIT ? 1 : 0,
+                        first != 0 ? s_min : -K_BIG);
       if (h.hit == 0) continue;
       prev_t = last_t;
       last_t = t;
@@ -447,7 +463,7 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
     if (u < KF(0.0) || s_min + u * (s_max - s_min) > best.s_in) continue;
     t = knit_piece_closest_t(g, codes, sp, cand_g[bi], o, D, m);
     if (t == K_BIG) continue;
-    h = knit_crossing(g, codes, colors, sp, o, D, t, 0);
+    h = knit_crossing(g, codes, colors, sp, o, D, t, 0, s_min);
     if (h.hit != 0 && h.s_in >= s_min && h.s_in <= s_max && h.s_in < best.s_in) {
       best = h;
       if (mode == KNIT_QUERY_ANY) break;

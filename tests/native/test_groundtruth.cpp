@@ -285,7 +285,7 @@ TEST(GroundTruth, RefinedCorrectorAgreesWithTheRequeriedSegment) {
       const k::KSpan sp = k::knit_span(g, s.codes(), k::knit_row(g, want.row), k::knit_column_of(want.t));
       k::KnitLineHit conv = want;
       for (int it = 0; it < 8; ++it) {
-        const k::KnitLineHit next = k::knit_crossing(g, s.codes(), s.colors(), sp, before.p, D, conv.t, 0);
+        const k::KnitLineHit next = k::knit_crossing(g, s.codes(), s.colors(), sp, before.p, D, conv.t, 0, -K_BIG);
         if (!next.hit) break;
         conv = next;
       }

@@ -270,6 +270,44 @@ TEST(Stitch, FirstEntryQueryFindsWhatTheFullQueryFinds) {
   std::printf("[ any ] %d hits, of which ANY stopped at a later entry than FIRST's in %d\n", hits, any_later);
 }
 
+// knit_crossing's floor: a crossing whose entry is sure to lie before
+// s_floor is not searched for. Lines from points on and near the tubes
+// (where a path's next segment starts) in all directions: with the floor,
+// the crossing is the one found without it when that entry is at or past
+// the floor, and a miss when it is before it.
+TEST(Stitch, CrossingFloorSkipsOnlyEntriesBeforeIt) {
+  KnitSurface s = make(test::seed());
+  const k::KnitGeom& g = s.geom();
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<float> U(0, 1);
+  int kept = 0, skipped = 0;
+  for (int i = 0; i < 6000; ++i) {
+    // A point near the surface of the tube under a random vertical line.
+    const k::KnitLineHit top = k::knit_vertical_query(g, s.codes(), s.colors(), 40 * U(rng), 40 * U(rng));
+    if (!top.hit) continue;
+    const float ct = 2 * U(rng) - 1, ph = 6.2831853f * U(rng), st = std::sqrt(1 - ct * ct);
+    const k::kvec3 D = k::kv3(st * std::cos(ph), st * std::sin(ph), ct);
+    const k::kvec3 o = k::kv3_madd(top.p, top.n, (U(rng) - 0.5f) * 0.2f * g.r);
+    const k::KSpan sp = k::knit_span(g, s.codes(), k::knit_row(g, top.row), k::knit_column_of(top.t));
+    const k::KnitLineHit free = k::knit_crossing(g, s.codes(), s.colors(), sp, o, D, top.t, 0, -K_BIG);
+    for (const float floor : {0.0f, -0.5f * g.r, 0.5f * g.r}) {
+      const k::KnitLineHit h = k::knit_crossing(g, s.codes(), s.colors(), sp, o, D, top.t, 0, floor);
+      if (free.hit && free.s_in >= floor) {
+        ASSERT_TRUE(h.hit) << "ray " << i << " floor " << floor;
+        EXPECT_EQ(h.s_in, free.s_in);
+        EXPECT_EQ(h.t, free.t);
+        ++kept;
+      } else {
+        EXPECT_FALSE(h.hit && h.s_in >= floor) << "ray " << i << " floor " << floor;
+        skipped += !h.hit && free.hit;
+      }
+    }
+  }
+  std::printf("[ floor ] entries at or past the floor kept: %d; entries before it skipped: %d\n", kept, skipped);
+  EXPECT_GT(kept, 1000);
+  EXPECT_GT(skipped, 1000);
+}
+
 TEST(Stitch, ParamsValidationNamesTheFieldAndValue) {
   auto msg = [](StitchParams p) {
     try {
