@@ -121,10 +121,9 @@ k::KnitCapm KnitSurface::march(k::KnitCapm start, Vec3 ray_world, const FramePro
   const bool flat = frame == nullptr || frame->is_flat();
   Vec3 t, b, n;
   k::KnitCapm st = start;
-  if (!flat) {
-    fp.frame_near(st.p.x, st.p.y, hint, t, b, n);
-    st = k::knit_capm_aim(st, k::kv3_to_local(ray_world, t, b, n));
-  }
+  // The start's direction (the caller's, in the frame where the ray met the
+  // base) only places the first segment's midpoint, where the frame is
+  // fetched and the segment aimed, as knit_capm_march_curved does.
   while (st.state == KNIT_CAPM_MARCHING) {
     if (!flat) {  // midpoint rule: aim the segment with the frame at its middle
       const Vec3 m = k::knit_capm_midpoint(geom_, st, seg);

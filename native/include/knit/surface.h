@@ -111,7 +111,9 @@ class KnitSurface {
   // The CAPM march from any start (k::knit_capm_start / begin_at), bending
   // the world-space ray `ray_world` (the direction it travels) with the
   // frames of `frame` (flat if null; its curvature() sets the metric and the
-  // segment length). Returns the final kernel state. blocked_only: the
+  // segment length). start.D, the ray in the frame at or near start.p,
+  // only places the first segment's midpoint (where the frame is fetched
+  // and the segment aimed). Returns the final kernel state. blocked_only: the
   // caller only asks whether the ray is blocked (a shadow ray), so each
   // segment's line query stops at the first entry it finds, not the nearest
   // (KNIT_QUERY_ANY), and a hit ends the march as found, without the
