@@ -214,15 +214,15 @@ KNIT_FN KExtreme knit_newton_extreme(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes)
   for (i = 0; i < iters; i++) {
     float w = k_sqrt(r2 - e.lr.rho2);
     float f = sgn * e.lr.s + w;
+    float f1, f2, step;
+    int tries;
+    int moved = 0;
     if (f > f_cap) {
       e.capped = 1;
       return e;
     }
-    float f1 = sgn * e.lr.sd1 - e.lr.phi1 / w;
-    float f2 = sgn * e.lr.sd2 - e.lr.phi2 / w - e.lr.phi1 * e.lr.phi1 / (w * w * w);
-    float step;
-    int tries;
-    int moved = 0;
+    f1 = sgn * e.lr.sd1 - e.lr.phi1 / w;
+    f2 = sgn * e.lr.sd2 - e.lr.phi2 / w - e.lr.phi1 * e.lr.phi1 / (w * w * w);
     if (f2 < KF(0.0)) step = -f1 / f2;
     else step = f1 * KF(0.05);  /* not concave here: small uphill step */
     step = k_clampf(step, KF(-0.25), KF(0.25));
