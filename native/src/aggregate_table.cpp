@@ -121,7 +121,7 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
           p[c + 1] = uint16_t(p[c] + (slot_[class_of_[pr * size_t(g.cols) + c]] == int(s) ? 1 : 0));
       }
   }
-  std::vector<Stats> stats(size_t(slots) * kThetaBins * kPhiBins);
+  moments_.assign(size_t(slots) * kThetaBins * kPhiBins * kMoments, 0.0f);
   const int m_rays = std::max(1, rays_per_direction);
   tbb::parallel_for(0, kClasses * kThetaBins, [&](int job) {
     const int cls = job / kThetaBins, it = job % kThetaBins;
@@ -160,45 +160,26 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
         const int dk = std::clamp(st.hit.row - cell.first, -1, 1), dc = std::clamp(st.hit.col - cell.second, -1, 1);
         near[(dk + 1) * 3 + dc + 1] += 1;
       }
-      Stats& s = stats[(size_t(slot_[size_t(cls)]) * kThetaBins + size_t(it)) * kPhiBins + size_t(ip)];
-      s.hit = float(hits / m_rays);
-      if (hits > 0) {
-        const double inv = 1.0 / hits;
-        s.nx = float(n[0] * inv);
-        s.ny = float(n[1] * inv);
-        s.nz = float(n[2] * inv);
-        const Vec3 t = k::kv3_normalize(tsum);
-        s.tx = t.x;
-        s.ty = t.y;
-        s.tz = t.z;
-        s.sx = float(sx * inv);
-        s.sy = float(sy * inv);
-        s.sxx = float(sxx * inv);
-        s.sxy = float(sxy * inv);
-        s.syy = float(syy * inv);
-        s.layers = float(layers * inv);
-        s.z = float(z * inv);
-        for (int q = 0; q < 9; ++q) s.near[q] = float(near[q] * inv);
+      // The moments are the sums over the rays: hit fraction times the
+      // hit-conditioned mean is the sum over hits divided by all rays.
+      float* mo = &moments_[((size_t(slot_[size_t(cls)]) * kThetaBins + size_t(it)) * kPhiBins + size_t(ip)) *
+                            kMoments];
+      const double inv = 1.0 / m_rays;
+      static_assert(kSlope == kNormal + 3 && kSlope2 == kSlope + 2 && kLayers == kSlope2 + 3 && kZ == kLayers + 1 &&
+                        kNear == kZ + 1 && kNear + 9 == kLinear && kTangent + 3 < kMoments,
+                    "the moments in the order of `sums`");
+      const double sums[] = {n[0], n[1], n[2], sx, sy, sxx, sxy, syy, layers, z};
+      mo[kHit] = float(hits * inv);
+      for (int q = 0; q < 10; ++q) mo[kNormal + q] = float(sums[q] * inv);
+      for (int q = 0; q < 9; ++q) mo[kNear + q] = float(near[q] * inv);
+      if (hits > 0) {  // the unit sign-aligned mean tangent times the hit fraction
+        const Vec3 t = k::kv3_scale(k::kv3_normalize(tsum), mo[kHit]);
+        mo[kTangent] = t.x;
+        mo[kTangent + 1] = t.y;
+        mo[kTangent + 2] = t.z;
       }
     }
   });
-  moments_.resize(stats.size() * kMoments);
-  for (size_t i = 0; i < stats.size(); ++i) {
-    const Stats& st = stats[i];
-    float* m = &moments_[i * kMoments];
-    const float h = st.hit;
-    m[kHit] = h;
-    static_assert(kSlope == kNormal + 3 && kSlope2 == kSlope + 2 && kLayers == kSlope2 + 3 && kZ == kLayers + 1 &&
-                      kNear == kZ + 1 && kNear + 9 == kLinear && kTangent + 3 < kMoments,
-                  "the moments in the order of `means`");
-    const float means[] = {st.nx, st.ny, st.nz, st.sx, st.sy, st.sxx, st.sxy, st.syy, st.layers, st.z};
-    for (int q = 0; q < 10; ++q) m[kNormal + q] = h * means[q];
-    for (int q = 0; q < 9; ++q) m[kNear + q] = h * st.near[q];
-    m[kTangent] = h * st.tx;
-    m[kTangent + 1] = h * st.ty;
-    m[kTangent + 2] = h * st.tz;
-    m[kTangent + 3] = 0;
-  }
   // The rows at theta = 0 and pi are one direction each: their columns,
   // marched with different points, are averaged (the moments mix linearly;
   // the tangent is the sign-aligned mean's direction times the mean hit

@@ -72,16 +72,6 @@ class FootprintTable {
   int classes_present() const { return slots_; }
 
  private:
-  struct Stats {
-    float hit = 0;                   // fraction of rays that hit yarn
-    float nx = 0, ny = 0, nz = 1;    // mean hit normal (not normalised)
-    float tx = 1, ty = 0, tz = 0;    // mean tangent (sign-aligned, unit)
-    float sx = 0, sy = 0;            // mean slopes
-    float sxx = 0, sxy = 0, syy = 0; // slope second moments
-    float layers = 0;                // mean layer count under the hits
-    float z = 0;                     // mean hit height
-    float near[9] = {};              // share of the hits on yarn of cell (k + dk, c + dc), dk, dc in -1..1
-  };
   // The four grid nodes around a direction and their bilinear weights.
   struct DirWeights {
     std::array<int, 4> node;  // theta * kPhiBins + phi
@@ -94,13 +84,13 @@ class FootprintTable {
   // means that sum over its hit fraction), then the unit mean tangent times
   // the hit fraction.
   enum Moment : int {
-    kHit = 0,
-    kNormal = 1,   // nx, ny, nz
-    kSlope = 4,    // sx, sy
-    kSlope2 = 6,   // sxx, sxy, syy
-    kLayers = 9,
-    kZ = 10,
-    kNear = 11,    // 9 shares, (dk + 1) * 3 + dc + 1
+    kHit = 0,      // fraction of the rays that hit yarn
+    kNormal = 1,   // nx, ny, nz: hit normal (the mean is not normalised)
+    kSlope = 4,    // sx, sy: slopes of the hit normal (knit_ms_slopes)
+    kSlope2 = 6,   // sxx, sxy, syy: their second moments
+    kLayers = 9,   // layer count under the hit
+    kZ = 10,       // hit height
+    kNear = 11,    // 9 shares of the hits on the yarn of cell (k + dk, c + dc), at (dk + 1) * 3 + dc + 1
     kLinear = 20,  // the moments above mix linearly
     kTangent = 20, // tx, ty, tz (times hit): a line, mixed sign-aligned
     kMoments = 24
