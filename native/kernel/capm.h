@@ -165,12 +165,17 @@ KNIT_FN KnitCapm knit_capm_aim(KNIT_IN(KnitCapm) in, kvec3 dir_local) {
 KNIT_FN kvec3 knit_capm_hit_midpoint(KNIT_IN(KnitCapm) before, KNIT_IN(KnitCapm) hit) {
   return kv3_madd(before.p, before.D, KF(0.5) * k_fmax(hit.hit.s_in, KF(0.0)));
 }
+/* Length of the corrected segment `again` (knit_capm_aim of the segment's
+ * start): to just past the first hit. */
+KNIT_FN float knit_capm_correct_len(KNIT_IN(KnitGeom) g, KNIT_IN(KnitCapm) again, KNIT_IN(KnitCapm) hit,
+                                    float max_segment) {
+  return k_fmin(knit_capm_segment(g, again, max_segment), KF(1.5) * k_fmax(hit.hit.s_in, KF(0.0)) + g.r);
+}
 KNIT_FN KnitCapm knit_capm_correct(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_ARRAY(int, colors),
                                    KNIT_IN(KnitCapm) before, KNIT_IN(KnitCapm) hit, kvec3 dir_local, float max_segment,
                                    float kx, float ky) {
   KnitCapm again = knit_capm_aim(before, dir_local);
-  float len = k_fmin(knit_capm_segment(g, again, max_segment),
-                     KF(1.5) * k_fmax(hit.hit.s_in, KF(0.0)) + g.r);
+  float len = knit_capm_correct_len(g, again, hit, max_segment);
   kvec3 dp = knit_capm_pattern_step(again, len, kx, ky);
   float lp = kv3_len(dp);
   if (again.state == KNIT_CAPM_MARCHING && lp > KF(0.0)) {

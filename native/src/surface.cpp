@@ -118,7 +118,7 @@ k::KnitCapm KnitSurface::march(k::KnitCapm start, Vec3 ray_world, const FramePro
   const Vec3 kappa = fp.curvature_near(start.p.x, start.p.y, hint);
   const float kmax = std::max(std::abs(kappa.x), std::abs(kappa.y));
   const float seg = kmax > 0 ? std::min(opt.max_segment, opt.max_bend / kmax) : opt.max_segment;
-  const bool flat = frame == nullptr || frame->is_flat();
+  const bool flat = fp.is_flat();
   Vec3 t, b, n;
   k::KnitCapm st = start;
   // The start's direction (the caller's, in the frame where the ray met the

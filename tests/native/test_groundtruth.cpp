@@ -274,7 +274,7 @@ TEST(GroundTruth, RefinedCorrectorAgreesWithTheRequeriedSegment) {
       ASSERT_EQ(refined.steps, st.steps);
       // The full re-query, as the corrector did before it refined.
       k::KnitCapm again = k::knit_capm_aim(before, dir);
-      const float len = std::min(k::knit_capm_segment(g, again, seg), 1.5f * std::max(st.hit.s_in, 0.0f) + g.r);
+      const float len = k::knit_capm_correct_len(g, again, st, seg);
       const k::kvec3 dp = k::knit_capm_pattern_step(again, len, kx, 0);
       const k::kvec3 D = k::kv3_normalize(dp);
       again = k::knit_capm_step_len(g, s.codes(), s.colors(), again, len, st.steps + 1, kx, 0, 0);
