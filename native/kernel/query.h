@@ -111,19 +111,33 @@ KNIT_FN kvec3 knit_slab_range(float lo, float hi, float p, float iv) {
 }
 
 /* Closest point of a quadratic piece to the line (o, D): u in [0, 1] and the
- * squared distance, from the cubic d/du |P_perp(Q(u) - o)|^2 = 0. KX = u, KY = rho^2. */
-KNIT_FN kvec3 knit_quad_closest(KNIT_IN(KQuad) q, kvec3 o, kvec3 D) {
+ * squared distance, from the cubic d/du |P_perp(Q(u) - o)|^2 = 0. KX = u, KY = rho^2.
+ * With m < K_BIG, a piece sure to stay farther than m from the line is
+ * dismissed before the cubic (KY = K_BIG): its projection stays within
+ * |C| / 4 of its chord A + u (B + C) (Q - chord = C (u^2 - u)), so the
+ * chord's distance less |C| / 4 bounds its distance from below. */
+KNIT_FN kvec3 knit_quad_closest_within(KNIT_IN(KQuad) q, kvec3 o, kvec3 D, float m) {
   kvec3 A0 = kv3_sub(q.q0, o);
   kvec3 A = kv3_madd(A0, D, -kv3_dot(A0, D));
   kvec3 B = kv3_madd(q.q1, D, -kv3_dot(q.q1, D));
   kvec3 C = kv3_madd(q.q2, D, -kv3_dot(q.q2, D));
-  KRoots rt = solve_cubic(KF(2.0) * kv3_dot(C, C), KF(3.0) * kv3_dot(B, C),
-                          kv3_dot(B, B) + KF(2.0) * kv3_dot(A, C), kv3_dot(A, B));
+  KRoots rt;
   float best_u = KF(0.0);
   float best = kv3_len2(A);
   float cand[4];
+  float d1;
   int i;
-  float d1 = kv3_len2(kv3_add(kv3_add(A, B), C));
+  if (m < K_BIG) {
+    kvec3 ch = kv3_add(B, C);
+    float l2 = kv3_len2(ch);
+    float uc = l2 > KF(0.0) ? k_clampf(-kv3_dot(A, ch) / l2, KF(0.0), KF(1.0)) : KF(0.0);
+    /* (with a margin, so that rounding never dismisses a piece the cubic keeps) */
+    if (k_sqrt(kv3_len2(kv3_madd(A, ch, uc))) - KF(0.25) * k_sqrt(kv3_len2(C)) > m * KF(1.001) + KF(1.0e-4))
+      return kv3(KF(0.0), K_BIG, KF(0.0));
+  }
+  rt = solve_cubic(KF(2.0) * kv3_dot(C, C), KF(3.0) * kv3_dot(B, C), kv3_dot(B, B) + KF(2.0) * kv3_dot(A, C),
+                   kv3_dot(A, B));
+  d1 = kv3_len2(kv3_add(kv3_add(A, B), C));
   if (d1 < best) { best = d1; best_u = KF(1.0); }
   cand[0] = rt.r0; cand[1] = rt.r1; cand[2] = rt.r2; cand[3] = KF(0.0);
   for (i = 0; i < rt.n; i++) {
@@ -135,6 +149,7 @@ KNIT_FN kvec3 knit_quad_closest(KNIT_IN(KQuad) q, kvec3 o, kvec3 D) {
   }
   return kv3(best_u, best, KF(0.0));
 }
+KNIT_FN kvec3 knit_quad_closest(KNIT_IN(KQuad) q, kvec3 o, kvec3 D) { return knit_quad_closest_within(q, o, D, K_BIG); }
 
 /* A lower bound of the distance in x and y from (px, py) to the
  * interpolant q over u in [0, 1] (z ignored): the distance to its chord
@@ -303,7 +318,7 @@ KNIT_FN KnitLineHit knit_crossing(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), K
 KNIT_FN float knit_piece_closest_t(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes), KNIT_IN(KSpan) sp, int gp,
                                    kvec3 o, kvec3 D, float m) {
   KQuad q = knit_span_piece_quad(g, sp, gp);
-  kvec3 cu = knit_quad_closest(q, o, D);
+  kvec3 cu = knit_quad_closest_within(q, o, D, m);
   if (KY(cu) > m * m) return K_BIG;
   return knit_newton_closest(g, codes, sp, o, D, q.t0 + KX(cu) * KNIT_PIECE_LEN, KNIT_NEWTON_CLOSEST);
 }
@@ -350,6 +365,9 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
   float cand_s[KNIT_QUERY_MAX_CAND];
   int cand_k[KNIT_QUERY_MAX_CAND], cand_g[KNIT_QUERY_MAX_CAND];
   int ncand = 0;
+  /* The span of the last candidate: pieces of one cell share it. */
+  KSpan sp;
+  int sp_k = 0, sp_c = 0, have_sp = 0;
   int first = mode == KNIT_QUERY_FIRST || mode == KNIT_QUERY_ANY ? 1 : 0; /* ordered search */
   /* The exact piece bounds refine only z (and slip-stitch floats): skip
    * them when the segment is vertical and spans the whole shell in z (FIRST
@@ -386,7 +404,7 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
       int jp = gp & 7;
       kvec3 ux;
       KnitLineHit h;
-      KSpan sp;
+      int c;
       /* Cheap cull first (no pattern lookups), then (unordered queries) the
        * exact piece box. */
       if (uyl[jp] > uyh[jp]) continue;
@@ -415,7 +433,13 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
         if (KY(cu) > m * m) continue;
         t_start = qx.t0 + KX(cu) * KNIT_PIECE_LEN;
       }
-      sp = knit_span(g, codes, rw, knit_piece_column(gp));
+      c = knit_piece_column(gp);
+      if (have_sp == 0 || sp_k != k || sp_c != c) {
+        sp = knit_span(g, codes, rw, c);
+        sp_k = k;
+        sp_c = c;
+        have_sp = 1;
+      }
       if (skip_exact == 0) {
         u = knit_segment_box_entry(pa, inv, knit_span_piece_bounds(g, sp, gp), rr);
         if (u < KF(0.0)) continue;
@@ -450,8 +474,8 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
     int bi = -1;
     float bs = K_BIG;
     KnitLineHit h;
-    KSpan sp;
     float t;
+    int c;
     for (i = 0; i < ncand; i++) {
       if (cand_s[i] < bs) {
         bs = cand_s[i];
@@ -463,7 +487,13 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
     /* No exact piece box here (knit_span_piece_bounds): on near-field
      * renders it culled a fifth of these candidates at twice the cost of the
      * closest points it saved. */
-    sp = knit_span(g, codes, knit_row(g, cand_k[bi]), knit_piece_column(cand_g[bi]));
+    c = knit_piece_column(cand_g[bi]);
+    if (have_sp == 0 || sp_k != cand_k[bi] || sp_c != c) {
+      sp = knit_span(g, codes, knit_row(g, cand_k[bi]), c);
+      sp_k = cand_k[bi];
+      sp_c = c;
+      have_sp = 1;
+    }
     t = knit_piece_closest_t(g, codes, sp, cand_g[bi], o, D, m);
     if (t == K_BIG) continue;
     h = knit_crossing(g, codes, colors, sp, o, D, t, 0, s_min);

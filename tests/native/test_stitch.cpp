@@ -270,6 +270,52 @@ TEST(Stitch, FirstEntryQueryFindsWhatTheFullQueryFinds) {
   std::printf("[ any ] %d hits, of which ANY stopped at a later entry than FIRST's in %d\n", hits, any_later);
 }
 
+// The same chord bound in three dimensions, which lets every line query skip
+// the cubic for a piece the line passes far from: a piece is dismissed only
+// when the interpolant's true distance from the line (double precision,
+// 2001 points) exceeds m, and a piece it keeps gets exactly the result
+// knit_quad_closest gives.
+TEST(Stitch, QuadClosestWithinDismissesOnlyFarPieces) {
+  KnitSurface s = make(test::seed());
+  const k::KnitGeom& g = s.geom();
+  const float m = g.r + g.quad_margin;
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<float> U(0.0f, 1.0f);
+  int far = 0, dismissed = 0, kept = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const int row = static_cast<int>(U(rng) * 12) - 4, gp = static_cast<int>(U(rng) * 96) - 16;
+    const k::KQuad q = k::knit_piece_quad(g, s.codes(), k::knit_row(g, row), gp);
+    const k::kvec3 mid = k::knit_quad_eval(q, 0.5f);
+    const k::kvec3 o = k::kv3(mid.x + (U(rng) * 2 - 1) * 3, mid.y + (U(rng) * 2 - 1) * 3, (U(rng) * 2 - 1) * 2);
+    const float ct = 2 * U(rng) - 1, ph = 6.2831853f * U(rng), st = std::sqrt(1 - ct * ct);
+    const k::kvec3 D = k::kv3(st * std::cos(ph), st * std::sin(ph), ct);
+    double best = 1e30;
+    for (int j = 0; j <= 2000; ++j) {
+      const double u = j / 2000.0;
+      const double p[3] = {q.q0.x + (q.q1.x + double(q.q2.x) * u) * u - o.x,
+                           q.q0.y + (q.q1.y + double(q.q2.y) * u) * u - o.y,
+                           q.q0.z + (q.q1.z + double(q.q2.z) * u) * u - o.z};
+      const double along = p[0] * D.x + p[1] * D.y + p[2] * D.z;
+      const double e[3] = {p[0] - along * D.x, p[1] - along * D.y, p[2] - along * D.z};
+      best = std::min(best, std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]));
+    }
+    const k::kvec3 w = k::knit_quad_closest_within(q, o, D, m);
+    if (w.y == K_BIG) {
+      ASSERT_GT(best, m) << "row " << row << " piece " << gp << " dismissed at distance " << best;
+      ++dismissed;
+    } else {
+      const k::kvec3 c = k::knit_quad_closest(q, o, D);
+      ASSERT_EQ(w.x, c.x);
+      ASSERT_EQ(w.y, c.y);
+      ++kept;
+    }
+    far += best > 1.5 * m;
+  }
+  std::printf("[ bound ] %d pieces dismissed, %d kept; farther than 1.5 m: %d\n", dismissed, kept, far);
+  EXPECT_GT(dismissed, far / 2);  // it does dismiss most far pieces
+  EXPECT_GT(kept, 1000);
+}
+
 // knit_crossing's floor: a crossing whose entry is sure to lie before
 // s_floor is not searched for. Lines from points on and near the tubes
 // (where a path's next segment starts) in all directions: with the floor,
