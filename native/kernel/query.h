@@ -365,6 +365,7 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
   float cand_s[KNIT_QUERY_MAX_CAND];
   int cand_k[KNIT_QUERY_MAX_CAND], cand_g[KNIT_QUERY_MAX_CAND];
   int ncand = 0;
+  int next_bi = -1; /* FIRST: the candidate to visit next, when known */
   /* The span of the last candidate: pieces of one cell share it. */
   KSpan sp;
   int sp_k = 0, sp_c = 0, have_sp = 0;
@@ -469,17 +470,32 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
       if (mode == KNIT_QUERY_ANY && best.hit != 0) return best;
     }
   }
-  /* FIRST: nearest box first; no later box can hold an entry before the best. */
+  /* FIRST: nearest box first; no later box can hold an entry before the best.
+   * A scan finds the nearest box left and the one after it (ties in index
+   * order), which is the next visited without another scan. */
   for (j = 0; j < ncand; j++) {
     int bi = -1;
     float bs = K_BIG;
     KnitLineHit h;
     float t;
     int c;
-    for (i = 0; i < ncand; i++) {
-      if (cand_s[i] < bs) {
-        bs = cand_s[i];
-        bi = i;
+    if (next_bi >= 0) {
+      bi = next_bi;
+      bs = cand_s[bi];
+      next_bi = -1;
+    } else {
+      float bs2 = K_BIG;
+      for (i = 0; i < ncand; i++) {
+        float v = cand_s[i];
+        if (v < bs) {
+          bs2 = bs;
+          next_bi = bi;
+          bs = v;
+          bi = i;
+        } else if (v < bs2) {
+          bs2 = v;
+          next_bi = i;
+        }
       }
     }
     if (bi < 0 || bs > best.s_in) break;
