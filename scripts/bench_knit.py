@@ -19,12 +19,17 @@ summary) to OUT_DIR.
   overhead        the knit model against a plain diffuse material of the same
                   colour on the same mesh and lights, same samples (64),
                   rendered in turn three times: the ratio of the fastest.
+  instructions    (not in the default set) the same pairs at the same size
+                  (so the same footprints) and 2 spp on one thread, counted
+                  in instructions of the render loop by callgrind (Debian's
+                  valgrind): the overhead without the timer's noise, about 4
+                  minutes.
 
   /usr/bin/python3 scripts/bench_knit.py BUILD_DIR OUT_DIR [--quick] [--paper-far-view] [--only PARTS]
 
 PARTS: comma-separated, of half_cylinder, garment, garment_alone, far_view,
-overhead (all by default; --paper-far-view adds the environment-only far
-views).
+overhead (all by default), instructions (only when named; --paper-far-view
+adds the environment-only far views).
 
 On the garment (the scarf over a bar, on a floor) the error is measured twice:
 over the whole image, where the floor and bar's lighting noise (the same for
@@ -34,6 +39,7 @@ least half of, from `knitshade render --mask-object scarf`).
 import json
 import math
 import os
+import shutil
 import subprocess
 import sys
 import time
@@ -192,11 +198,7 @@ class Bench:
         of their first yarn colour. The two are rendered in turn `repeats` times (the same seed, so the same
         images); the ratio is of the fastest of each, the least disturbed by the rest of the machine."""
         print(f"overhead: {name}", flush=True)
-        diffuse = json.loads(json.dumps(scene))
-        for key, m in diffuse["materials"].items():
-            if m["type"] == "knit":
-                c = m["yarn_colors"][0]
-                diffuse["materials"][key] = {"type": "diffuse", "albedo": c}
+        diffuse = diffuse_twin(scene)
         tk, td = [], []
         for _ in range(max(1, repeats)):
             _, rk = self.render(name + "_knit", scene, spp)
@@ -210,6 +212,48 @@ class Bench:
         print(f"  -> knit {res['knit_seconds']:.2f} s, diffuse {res['diffuse_seconds']:.2f} s (fastest of "
               f"{len(tk)}), ratio {res['ratio']:.2f} (of medians {res['ratio_of_medians']:.2f})", flush=True)
         return res
+
+
+    # The render loop's lambda in knit::render::render_image: callgrind counts from its entry only, so
+    # parsing, the class table's build and image output stay out of the count.
+    RENDER_LOOP = ("knit::render::render_image(knit::render::Scene const&, knit::render::RenderSettings "
+                   "const&)::{lambda(int)#1}::operator()(int) const")
+
+    def instructions(self, name, scene, spp=2):
+        """Instructions of the render loop (callgrind, one thread) for the scene and its diffuse twin (see
+        overhead), at the same size (the pixel footprints decide between the class table and marching) and
+        `spp` samples: the overhead's ratio, deterministic."""
+        print(f"instructions: {name}", flush=True)
+        counts = {}
+        for label, sc in (("knit", scene), ("diffuse", diffuse_twin(scene))):
+            path = os.path.join(self.out, f"{name}_{label}_instr.json")
+            with open(path, "w") as f:
+                json.dump(sc, f, indent=1)
+            cmd = ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
+                   "--toggle-collect=" + self.RENDER_LOOP, self.cli, "render", path, "-o",
+                   os.path.join(self.out, f"{name}_{label}_instr.exr"), "--spp", str(spp), "--threads", "1",
+                   "--quiet"]
+            r = subprocess.run(cmd, check=True, capture_output=True, text=True)
+            found = [line for line in r.stderr.splitlines() if "Collected :" in line]
+            n = int(found[-1].split(":")[-1]) if found else 0
+            if n <= 0:
+                raise RuntimeError(f"callgrind counted nothing in {self.RENDER_LOOP!r}: has render_image changed?")
+            counts[label] = n
+        res = {"width": scene["film"]["width"], "height": scene["film"]["height"], "spp": spp,
+               "knit_instructions": counts["knit"], "diffuse_instructions": counts["diffuse"],
+               "ratio": counts["knit"] / counts["diffuse"]}
+        print(f"  -> knit {counts['knit'] / 1e6:.0f} M, diffuse {counts['diffuse'] / 1e6:.0f} M instructions, "
+              f"ratio {res['ratio']:.2f}", flush=True)
+        return res
+
+
+def diffuse_twin(scene):
+    """The scene with its knit materials replaced by diffuse ones of their first yarn colour."""
+    diffuse = json.loads(json.dumps(scene))
+    for key, m in diffuse["materials"].items():
+        if m["type"] == "knit":
+            diffuse["materials"][key] = {"type": "diffuse", "albedo": m["yarn_colors"][0]}
+    return diffuse
 
 
 def sized(scene, w, h):
@@ -319,18 +363,24 @@ def main():
                 "far16_" + name, ms16, nf, "multi_scale", "near_field", ladder, ref_spp, tag_b="far_nf_" + name)
 
     # 4. Overhead of the knit material against diffuse, same mesh, lights and samples.
+    overhead_scenes = {
+        "half_cylinder": ("oh_half_cylinder", hc),
+        "swatch_closeup": ("oh_swatch", sized(load("swatch_closeup.json"), size, size)),
+        "scarf": ("oh_scarf", sized(load("scarf.json"), size, int(size * 1.2))),
+        "half_cylinder_multi_scale": ("oh_half_cylinder_ms", multi_scale(hc)),
+        "swatch_far_multi_scale": ("oh_swatch_far", far),
+        "scarf_multi_scale": ("oh_scarf_ms", multi_scale(sized(load("scarf.json"), size, int(size * 1.2)))),
+    }
     if "overhead" in parts:
         # 64 spp: the diffuse renders then take about a second, not a tenth.
         oh = 16 if quick else 64
-        b.results["overhead"] = {
-            "half_cylinder": b.overhead("oh_half_cylinder", hc, oh),
-            "swatch_closeup": b.overhead("oh_swatch", sized(load("swatch_closeup.json"), size, size), oh),
-            "scarf": b.overhead("oh_scarf", sized(load("scarf.json"), size, int(size * 1.2)), oh),
-            "half_cylinder_multi_scale": b.overhead("oh_half_cylinder_ms", multi_scale(hc), oh),
-            "swatch_far_multi_scale": b.overhead("oh_swatch_far", far, oh),
-            "scarf_multi_scale": b.overhead("oh_scarf_ms", multi_scale(sized(load("scarf.json"), size, int(size * 1.2))),
-                                            oh),
-        }
+        b.results["overhead"] = {key: b.overhead(tag, sc, oh) for key, (tag, sc) in overhead_scenes.items()}
+    # 4b. The same pairs in instructions (only when asked for: callgrind is slow).
+    if "instructions" in parts:
+        if shutil.which("valgrind") is None:
+            sys.exit("bench_knit: the instructions part needs callgrind: apt-get install valgrind")
+        b.results["overhead_instructions"] = {key: b.instructions(tag + "_instr", sc)
+                                              for key, (tag, sc) in overhead_scenes.items()}
     b.results["finished"] = time.ctime()
     with open(os.path.join(b.out, "bench_knit.json"), "w") as f:
         json.dump(b.results, f, indent=2)
