@@ -370,25 +370,32 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
   for (double n : counts) cells += n;
   std::array<float, kLinear> sum{};
   Vec3 tsum = k::kv3(0, 0, 0);
+  // p_delta exactly as pass_of() has it for shadow rays (the same sums in
+  // the same order: a class's hit fraction as slot_hit_fraction forms it,
+  // the counts, integers, summed exactly in any order), taken in the same pass.
+  double hits = 0;
   if (cells > 0) {
     for (int slot = 0; slot < slots_; ++slot) {
       const double n = counts[size_t(class_of_slot_[size_t(slot)])];
       if (!(n > 0)) continue;
       const float share = float(n / cells);
+      float h = 0;
       for (int q = 0; q < 4; ++q) {
         const float w = share * dw.w[size_t(q)];
         const float* m = moments(slot, dw.node[size_t(q)]);
+        h += dw.w[size_t(q)] * m[kHit];
         add_scaled<kLinear>(sum.data(), m, w);
         // Tangents are lines, not arrows: sign-aligned with the sum so far.
         const Vec3 t = k::kv3_scale(k::kv3(m[kTangent], m[kTangent + 1], m[kTangent + 2]), w);
         tsum = add_line(tsum, t);
       }
+      hits += n * double(std::clamp(h, 0.0f, 1.0f));
     }
   }
   // In points: the cells of a box of up to KNIT_MS_MAX_POINTS, else the
   // footprint's points (a counted box may hold up to 1e10 cells).
   a.points = all_cells(f) ? int(cells) : f.n;
-  a.p_delta = pass_of(counts, dw);  // exactly as p_delta() has it (shadow rays)
+  a.p_delta = pass_fraction(hits, cells);
   const float hit = 1 - a.p_delta;  // the hit fraction over the box
   a.hits = hit > 0 ? std::max(1, int(std::lround(hit * float(a.points)))) : 0;
   a.steps = 0;

@@ -375,11 +375,12 @@ float KnitMaterial::transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameP
     const float S = hit.pattern_per_world, us = params_.uv_scale;
     const float x = us * hit.u, y = us * hit.v;
     const Vec3 wi = k::kv3_neg(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n));
-    const Vec3 kap = frame ? frame->curvature(x, y) : k::kv3(hit.kx / S, hit.ky / S, 0);
     const Vec3 fx = k::kv3(us * hit.dudx, us * hit.dvdx, 0), fy = k::kv3(us * hit.dudy, us * hit.dvdy, 0);
     const k::KFootprint f =
         k::knit_footprint(surface_.geom(), x, y, fx, fy, footprint_points_for(fx, fy), shift[0], shift[1]);
     if (table_ && f.stratified) return table_->p_delta(surface_, f, wi);
+    // (the curvature only for the marched footprint: a frame lookup)
+    const Vec3 kap = frame ? frame->curvature(x, y) : k::kv3(hit.kx / S, hit.ky / S, 0);
     return k::knit_footprint_p_delta(surface_.geom(), surface_.codes(), surface_.colors(), f, wi, kap.x, kap.y,
                                      params_.capm_options.max_segment, params_.capm_options.max_steps);
   }

@@ -186,6 +186,8 @@ TEST(FootprintTable, CellVisitsWrapAndOneClassNeedsNone) {
         EXPECT_FLOAT_EQ(a.n.x, a0.n.x) << rep;
         EXPECT_FLOAT_EQ(a.n.z, a0.n.z) << rep;
         EXPECT_FLOAT_EQ(a.layers, a0.layers) << rep;
+        // A shadow ray's p_delta is the camera hit's, bit for bit.
+        EXPECT_EQ(table.p_delta(s, f, wi), a.p_delta) << rep;
         EXPECT_FLOAT_EQ(table.p_delta(s, f, wi), a0.p_delta) << rep;
       }
     }
@@ -241,7 +243,8 @@ TEST(FootprintTable, CellVisitsWrapAndOneClassNeedsNone) {
       EXPECT_NEAR(ap.n.z, ac.n.z, 1e-6) << what;
       EXPECT_NEAR(ap.layers, ac.layers, 1e-5) << what;
       EXPECT_NEAR(ap.sxx, ac.sxx, 1e-5) << what;
-      EXPECT_NEAR(tp.p_delta(plain, fp, wi), ap.p_delta, 1e-6) << what;
+      EXPECT_EQ(tp.p_delta(plain, fp, wi), ap.p_delta) << what;  // bit for bit, as above
+      EXPECT_EQ(tc.p_delta(coloured, fc, wi), ac.p_delta) << what;
       EXPECT_NEAR(tc.p_delta(coloured, fc, wi), ap.p_delta, 1e-6) << what;
     }
     EXPECT_GE(large, 5) << "footprints of more than KNIT_MS_MAX_POINTS cells tested";
