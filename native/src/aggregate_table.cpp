@@ -43,21 +43,6 @@ inline void add_scaled(float* s, const float* m, float w) {
 
 }  // namespace
 
-// An odd polynomial for atan on [0, 1], fitted minimax for this table, and
-// the octant identities. (acosf and atan2f from libm took a fifth of the
-// aggregate's instructions.)
-float atan2_approx(float y, float x) {
-  const float ax = std::fabs(x), ay = std::fabs(y);
-  const float hi = std::max(ax, ay), lo = std::min(ax, ay);
-  if (!(hi > 0)) return 0;
-  const float t = lo / hi, s = t * t;
-  float r = t * (0.99997723f +
-                 s * (-0.33262283f + s * (0.19354036f + s * (-0.11642643f + s * (0.05264729f + s * -0.01171911f)))));
-  if (ay > ax) r = 0.5f * kPi - r;
-  if (x < 0) r = kPi - r;
-  return y < 0 ? -r : r;
-}
-
 namespace {
 
 // p_delta of `hits` out of `cells` (1 for no cells), kept a probability.
@@ -111,13 +96,38 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
     single_class_ = int(std::find_if(slot_.begin(), slot_.end(), [](int s) { return s >= 0; }) - slot_.begin());
   for (int i = 0; i < kClasses; ++i)
     if (slot_[size_t(i)] >= 0) class_of_slot_[size_t(slot_[size_t(i)])] = i;
-  const size_t cols1 = size_t(g.cols) + 1;
-  if (slots > 1 && size_t(g.rows) * size_t(slots) * cols1 <= kMaxPrefix) {
-    prefix_.assign(size_t(g.rows) * size_t(slots) * cols1, 0);
-    for (size_t pr = 0; pr < size_t(g.rows); ++pr)
+  // The class matrix's smallest periods, divisors of the pattern's size (a
+  // rib written out over several rows repeats every row): counting over
+  // one period counts the same cells, in fewer rows.
+  const auto rows_repeat = [&](int p) {  // rows pr and pr - p agree for every pr >= p
+    return std::equal(class_of_.begin() + ptrdiff_t(p) * g.cols, class_of_.end(), class_of_.begin());
+  };
+  const auto cols_repeat = [&](int q) {  // columns c and c - q agree in every row, c >= q
+    for (int pr = 0; pr < g.rows; ++pr) {
+      const unsigned char* row = &class_of_[size_t(pr) * size_t(g.cols)];
+      if (!std::equal(row + q, row + g.cols, row)) return false;
+    }
+    return true;
+  };
+  period_rows_ = g.rows;
+  for (int p = 1; p < g.rows; ++p)
+    if (g.rows % p == 0 && rows_repeat(p)) {
+      period_rows_ = p;
+      break;
+    }
+  period_cols_ = g.cols;
+  for (int q = 1; q < g.cols; ++q)
+    if (g.cols % q == 0 && cols_repeat(q)) {
+      period_cols_ = q;
+      break;
+    }
+  const size_t cols1 = size_t(period_cols_) + 1;
+  if (slots > 1 && size_t(period_rows_) * size_t(slots) * cols1 <= kMaxPrefix) {
+    prefix_.assign(size_t(period_rows_) * size_t(slots) * cols1, 0);
+    for (size_t pr = 0; pr < size_t(period_rows_); ++pr)
       for (size_t s = 0; s < size_t(slots); ++s) {
         uint16_t* p = &prefix_[(pr * size_t(slots) + s) * cols1];
-        for (size_t c = 0; c < size_t(g.cols); ++c)
+        for (size_t c = 0; c < size_t(period_cols_); ++c)
           p[c + 1] = uint16_t(p[c] + (slot_[class_of_[pr * size_t(g.cols) + c]] == int(s) ? 1 : 0));
       }
   }
@@ -272,7 +282,7 @@ void FootprintTable::for_each_cell(const KnitSurface& surface, const k::KFootpri
   }
 }
 
-bool FootprintTable::class_counts(const KnitSurface& surface, const k::KFootprint& f,
+bool FootprintTable::class_counts(const k::KFootprint& f,
                                   std::array<double, kClasses>& counts) const {
   counts.fill(0);
   if (single_class_ >= 0) {
@@ -280,31 +290,34 @@ bool FootprintTable::class_counts(const KnitSurface& surface, const k::KFootprin
     return true;
   }
   if (prefix_.empty()) return false;
-  const k::KnitGeom& g = surface.geom();
+  // Over one period of the class matrix (period_rows_ x period_cols_, which
+  // divide the pattern's rows and columns: the same counts as over the
+  // pattern, k::knit_cell_index's row order included).
+  const int rows = period_rows_, cols = period_cols_;
   const int slots = slots_;
-  const size_t cols1 = size_t(g.cols) + 1;
+  const size_t cols1 = size_t(cols) + 1;
   // Columns [c0, c0 + ncx) of a row, wrapped: `full` whole rows and a rest.
-  const int c0 = k::k_modi(f.bx0, g.cols);
-  const int64_t full = f.ncx / g.cols;
-  const int rest = f.ncx % g.cols;
+  const int c0 = k::k_modi(f.bx0, cols);
+  const int64_t full = f.ncx / cols;
+  const int rest = f.ncx % cols;
   // Rows [by0, by0 + ncy), wrapped: the first min(ncy, rows) of them stand
   // for every row of the box, the first ncy % rows once more than the
   // others. A box of up to 1e5 x 1e5 cells (knit_footprint's cap) costs at
-  // most a pass over the pattern's rows.
-  const int nr = std::min(f.ncy, g.rows);
-  const int64_t per = f.ncy / g.rows, extra = f.ncy % g.rows;
+  // most a pass over the period's rows.
+  const int nr = std::min(f.ncy, rows);
+  const int64_t per = f.ncy / rows, extra = f.ncy % rows;
   std::array<int64_t, kClasses> n{};  // by slot
-  // Pattern row of box row cy, counted down with wrap-around (one modulo).
-  int pr = g.rows - 1 - k::k_modi(f.by0, g.rows);
-  for (int cy = 0; cy < nr; ++cy, pr = pr > 0 ? pr - 1 : g.rows - 1) {
+  // Period row of box row cy, counted down with wrap-around (one modulo).
+  int pr = rows - 1 - k::k_modi(f.by0, rows);
+  for (int cy = 0; cy < nr; ++cy, pr = pr > 0 ? pr - 1 : rows - 1) {
     const int64_t times = per + (cy < extra ? 1 : 0);
     for (int s = 0; s < slots; ++s) {
       const uint16_t* p = &prefix_[(size_t(pr) * size_t(slots) + size_t(s)) * cols1];
-      int64_t m = full * p[g.cols];
-      if (c0 + rest <= g.cols) {
+      int64_t m = full * p[cols];
+      if (c0 + rest <= cols) {
         m += p[c0 + rest] - p[c0];
       } else {
-        m += (p[g.cols] - p[c0]) + p[c0 + rest - g.cols];
+        m += (p[cols] - p[c0]) + p[c0 + rest - cols];
       }
       n[size_t(s)] += times * m;
     }
@@ -325,7 +338,7 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
   // them (see class_counts), else by visiting them; with several colour
   // indices the colours visit the cells they need.
   std::array<double, kClasses> counts;
-  const bool counted = class_counts(surface, f, counts);
+  const bool counted = class_counts(f, counts);
   std::array<float, kClasses> cls_hit;  // hit fractions of the visited classes, on first use
   cls_hit.fill(-1);
   std::array<std::array<float, 9>, kClasses> cls_near;  // row cls valid once near_ready[cls]
@@ -456,7 +469,7 @@ float FootprintTable::pass_of(const std::array<double, kClasses>& counts, const 
 float FootprintTable::p_delta(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
   const DirWeights dw = dir_weights(wi);
   std::array<double, kClasses> counts;
-  if (!class_counts(surface, f, counts))
+  if (!class_counts(f, counts))
     for_each_cell(surface, f, [&](int cls, int, int) { counts[size_t(cls)] += 1; });
   return pass_of(counts, dw);
 }

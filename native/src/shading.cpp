@@ -249,6 +249,8 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     // (more colours than the histogram has bins) the colour of one hit.
     if (bp.num_colors() > KNIT_MS_COLORS) {
       set_colors(sh, a.color_pick);
+    } else if (bp.num_colors() == 1 && a.color_w[0] == 1.0f) {
+      set_colors(sh, 0);  // what mixing the one colour at weight 1 gives, bit for bit
     } else {
       mix_colors(sh, a.color_w);
     }

@@ -251,6 +251,51 @@ TEST(FootprintTable, CellVisitsWrapAndOneClassNeedsNone) {
   }
 }
 
+// The class counts of a box are taken over the class matrix's smallest
+// periods (a rib written out over several rows repeats every row): the
+// same counts as the box's cells classed one by one (cell_class, from the
+// pattern), for patterns whose periods are smaller than their size, boxes
+// of any size and place, negative coordinates included.
+TEST(FootprintTable, BoxCountsOverThePeriodsAreTheCellsCounts) {
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> U(0, 1);
+  // 2x2 rib written 4 x 8 (periods 1 x 4); seed written 6 x 6 (2 x 2); a
+  // 3 x 4 block tiled 6 x 8 (3 x 4); the pyramid (16 x 16, no shorter period).
+  const std::vector<std::vector<int>> rib = {{0, 0, 1, 1, 0, 0, 1, 1}, {0, 0, 1, 1, 0, 0, 1, 1},
+                                             {0, 0, 1, 1, 0, 0, 1, 1}, {0, 0, 1, 1, 0, 0, 1, 1}};
+  std::vector<std::vector<int>> seed(6, std::vector<int>(6)), block(6, std::vector<int>(8));
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c) seed[size_t(r)][size_t(c)] = (r + c) % 2;
+  const int b[3][4] = {{0, 1, 1, 0}, {1, 1, 0, 0}, {0, 0, 0, 1}};
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 8; ++c) block[size_t(r)][size_t(c)] = b[r % 3][c % 4];
+  struct Case {
+    Pattern pat;
+    int pr, pc;
+  };
+  for (const Case& cs : {Case{Pattern::from_rows(rib), 1, 4}, Case{Pattern::from_rows(seed), 2, 2},
+                         Case{Pattern::from_rows(block), 3, 4}, Case{pyramid16(), 16, 16}}) {
+    KnitSurface s(cs.pat, StitchParams{});
+    const FootprintTable table(s, CapmOptions{}, 4);
+    EXPECT_EQ(table.period_rows(), cs.pr) << cs.pat.rows() << " x " << cs.pat.cols();
+    EXPECT_EQ(table.period_cols(), cs.pc) << cs.pat.rows() << " x " << cs.pat.cols();
+    const float cw = 6.2831853f, ch = s.geom().row_spacing;
+    for (int rep = 0; rep < 60; ++rep) {
+      const float sx = cw * (1.5f + 30 * U(rng) * U(rng)), sy = ch * (1.5f + 30 * U(rng) * U(rng));
+      const float x = 600 * U(rng) - 300, y = 600 * U(rng) - 300;
+      const k::KFootprint f = k::knit_footprint(s.geom(), x, y, k::kv3(sx, 0, 0), k::kv3(0, sy, 0), 4, 0.5f, 0.5f);
+      ASSERT_EQ(f.stratified, 1);
+      std::array<double, FootprintTable::kClasses> ref{};
+      for (int ky = 0; ky < f.ncy; ++ky)
+        for (int kx = 0; kx < f.ncx; ++kx) ref[size_t(FootprintTable::cell_class(s, f.by0 + ky, f.bx0 + kx))] += 1;
+      const std::array<double, FootprintTable::kClasses> got = table.box_counts(f);
+      for (int c = 0; c < FootprintTable::kClasses; ++c)
+        ASSERT_EQ(got[size_t(c)], ref[size_t(c)]) << "class " << c << ", box " << f.ncx << " x " << f.ncy << " at ("
+                                                  << f.bx0 << ", " << f.by0 << ")";
+    }
+  }
+}
+
 // Colours: on the two-colour diamond blocks, the table's histogram over a
 // footprint against the marched aggregate's (64 points, many shifts), and
 // its mean layer count.

@@ -28,7 +28,9 @@
 // measures it against explicit tubes and against the marched aggregate.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -38,8 +40,22 @@
 namespace knit {
 
 // atan2(y, x) in [-pi, pi] to within 2e-6 rad, a fraction of libm's cost
-// (the table's direction bins are 0.14 and 0.39 rad wide).
-float atan2_approx(float y, float x);
+// (the table's direction bins are 0.14 and 0.39 rad wide): an odd
+// polynomial for atan on [0, 1], fitted minimax for this table, and the
+// octant identities. (acosf and atan2f from libm took a fifth of the
+// aggregate's instructions.) Inline: two calls per table lookup.
+inline float atan2_approx(float y, float x) {
+  constexpr float pi = 3.14159265358979f;
+  const float ax = std::fabs(x), ay = std::fabs(y);
+  const float hi = std::max(ax, ay), lo = std::min(ax, ay);
+  if (!(hi > 0)) return 0;
+  const float t = lo / hi, s = t * t;
+  float r = t * (0.99997723f +
+                 s * (-0.33262283f + s * (0.19354036f + s * (-0.11642643f + s * (0.05264729f + s * -0.01171911f)))));
+  if (ay > ax) r = 0.5f * pi - r;
+  if (x < 0) r = pi - r;
+  return y < 0 ? -r : r;
+}
 
 class FootprintTable {
  public:
@@ -65,6 +81,16 @@ class FootprintTable {
 
   // Class (0..9) of cell (row k from the bottom, column c) of the surface.
   static int cell_class(const KnitSurface& surface, int k, int c);
+  // How many cells of each class f's box holds, as the aggregate counts
+  // them (all -1 when the table cannot count them: it then visits the
+  // cells), and the periods it counts over. For tests.
+  std::array<double, kClasses> box_counts(const k::KFootprint& f) const {
+    std::array<double, kClasses> counts;
+    if (!class_counts(f, counts)) counts.fill(-1);
+    return counts;
+  }
+  int period_rows() const { return period_rows_; }
+  int period_cols() const { return period_cols_; }
 
   size_t bytes() const {
     return sizeof(*this) + moments_.size() * sizeof(float) + class_of_.size() + prefix_.size() * sizeof(uint16_t);
@@ -115,7 +141,7 @@ class FootprintTable {
   // prefix counts, a few additions per row of the box (at most one pass over
   // the pattern's rows for a box of any height) instead of a visit per cell;
   // false when there are no prefix counts (a pattern too large for them).
-  bool class_counts(const KnitSurface& surface, const k::KFootprint& f, std::array<double, kClasses>& counts) const;
+  bool class_counts(const k::KFootprint& f, std::array<double, kClasses>& counts) const;
   // p_delta of cells counted by class (1 for none), seen from direction d.
   float pass_of(const std::array<double, kClasses>& counts, const DirWeights& d) const;
 
@@ -125,9 +151,12 @@ class FootprintTable {
   std::vector<unsigned char> class_of_;  // class of each pattern cell, by knit_cell_index
   bool one_colour_ = true;               // every cell has colour index 0
   int single_class_ = -1;                // the class of every cell, when the pattern has one
-  // Per pattern row (as in class_of_) and slot: how many of the row's first
-  // c cells have that slot's class, c = 0..cols; empty when there is one
-  // class or rows x slots x (cols + 1) exceeds kMaxPrefix.
+  // The smallest row and column periods of class_of_ (divisors of the
+  // pattern's rows and columns), over which class_counts counts.
+  int period_rows_ = 1, period_cols_ = 1;
+  // Per period row (as in class_of_) and slot: how many of the row's first
+  // c cells have that slot's class, c = 0..period_cols_; empty when there is
+  // one class or period_rows_ x slots x (period_cols_ + 1) exceeds kMaxPrefix.
   static constexpr size_t kMaxPrefix = size_t(1) << 16;
   std::vector<uint16_t> prefix_;
   std::array<int, kClasses> class_of_slot_{};
