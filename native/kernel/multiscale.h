@@ -100,14 +100,28 @@ KNIT_STRUCT(KFootprint)
   int n;               /* points */
 KNIT_STRUCT_END(KFootprint)
 
+/* The footprint's box extent in cells, x (KX) and y (KY); clamped (NaN to
+ * 0) so that cell indices fit an int even for the huge footprints of
+ * grazing rays. */
+KNIT_FN kvec3 knit_footprint_extent(KNIT_IN(KnitGeom) g, kvec3 fx, kvec3 fy) {
+  float cw = K_2PI, ch = g.row_spacing;
+  return kv3(k_clampf((k_fabs(KX(fx)) + k_fabs(KX(fy))) / cw, KF(0.0), KNIT_MS_MAX_CELLS),
+             k_clampf((k_fabs(KY(fx)) + k_fabs(KY(fy))) / ch, KF(0.0), KNIT_MS_MAX_CELLS), KF(0.0));
+}
+
+/* Whether knit_footprint stratifies the footprint by cell (a cell or more
+ * in both directions), without the rest of it. */
+KNIT_FN int knit_footprint_stratified(KNIT_IN(KnitGeom) g, kvec3 fx, kvec3 fy) {
+  kvec3 e = knit_footprint_extent(g, fx, fy);
+  return (KX(e) >= KF(1.0) && KY(e) >= KF(1.0)) ? 1 : 0;
+}
+
 KNIT_FN KFootprint knit_footprint(KNIT_IN(KnitGeom) g, float x, float y, kvec3 fx, kvec3 fy, int n_points,
                                   float shift_x, float shift_y) {
   KFootprint f;
   float cw = K_2PI, ch = g.row_spacing;
-  /* Footprint box, in cells; clamped (NaN to 0) so that the cell indices
-   * below fit an int even for the huge footprints of grazing rays. */
-  float ex = k_clampf((k_fabs(KX(fx)) + k_fabs(KX(fy))) / cw, KF(0.0), KNIT_MS_MAX_CELLS);
-  float ey = k_clampf((k_fabs(KY(fx)) + k_fabs(KY(fy))) / ch, KF(0.0), KNIT_MS_MAX_CELLS);
+  kvec3 e = knit_footprint_extent(g, fx, fy); /* the box, in cells */
+  float ex = KX(e), ey = KY(e);
   f.x = x;
   f.y = y;
   f.fx = fx;

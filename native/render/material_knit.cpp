@@ -145,11 +145,20 @@ const knit::KnitMaterial& KnitModelMaterial::model_for(const knit::BaseHit& h) c
   return extent > min_footprint_ ? *model_ : *point_model_;
 }
 
+// The footprint's sample shift: drawn when the model reads it, else the
+// draw is skipped (a multi-scale footprint read whole from the class table,
+// the near field), so that the sampler's later draws stay the same.
+static Vec2 footprint_shift(const knit::KnitMaterial& model, const knit::BaseHit& hit, Sampler& sampler) {
+  if (model.uses_shift(hit)) return sampler.get2d();
+  sampler.skip();
+  return {0.5f, 0.5f};
+}
+
 PassThrough KnitModelMaterial::resolve(SurfaceInteraction& si, const RayDifferential& ray, Sampler& sampler) const {
   PassThrough pt;
-  const Vec2 shift = sampler.get2d();
   knit::BaseHit hit = base_hit(si, ray.diff_scale);
   const knit::KnitMaterial& model = cone_footprint(si, ray.d, hit) ? *model_ : model_for(hit);
+  const Vec2 shift = footprint_shift(model, hit, sampler);
   const knit::KnitShade sh = model.shade(hit, to_kvec(ray.d), frame_.get(), {shift.x, shift.y});
   pt.from_table = sh.from_table;
   if (sh.pass_through) {
@@ -235,9 +244,9 @@ bool KnitModelMaterial::bounce_inside(SurfaceInteraction& si, Vec3 wi) const {
 }
 
 Rgb KnitModelMaterial::transmittance(const SurfaceInteraction& si, Vec3 w, Sampler& sampler) const {
-  const Vec2 shift = sampler.get2d();
   knit::BaseHit hit = base_hit(si);
   const knit::KnitMaterial& model = cone_footprint(si, w, hit) ? *model_ : model_for(hit);
+  const Vec2 shift = footprint_shift(model, hit, sampler);
   return Rgb(model.transmittance(hit, to_kvec(w), frame_.get(), {shift.x, shift.y}));
 }
 

@@ -138,6 +138,8 @@ class Sampler {
     next_draw(i, sx, sy);
     return fraction_to_float(reverse_bits(owen_scramble_reversed(i, sx)));
   }
+  // Takes a draw without computing it (the draws after it are unchanged).
+  void skip() { ++draw_; }
   Vec2 get2d() {
     uint32_t i, sx, sy;
     next_draw(i, sx, sy);

@@ -209,6 +209,16 @@ void KnitMaterial::set_colors(KnitShade& sh, int color_index) const {
   sh.kd_t = params_.bsdf.transmit_colors[size_t(c)];
 }
 
+bool KnitMaterial::uses_shift(const BaseHit& hit) const {
+  if (params_.mode != KnitMode::MultiScale) return false;  // one ray, no footprint points
+  if (!table_ || !table_->counts_without_points()) return true;
+  // From the class table (the same test as shade's) with no points: only a
+  // marched footprint reads the shift.
+  const float us = params_.uv_scale;
+  const Vec3 fx = k::kv3(us * hit.dudx, us * hit.dvdx, 0), fy = k::kv3(us * hit.dudy, us * hit.dvdy, 0);
+  return k::knit_footprint_stratified(surface_.geom(), fx, fy) == 0;
+}
+
 KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
                               std::array<float, 2> shift) const {
   KnitShade sh = unshaded();

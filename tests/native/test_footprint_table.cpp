@@ -368,6 +368,57 @@ TEST(FootprintTable, MaterialUsesItOnlyForLargeFootprints) {
   EXPECT_GT(floats.shade(hit, dir, nullptr).steps, 0);
 }
 
+// KnitMaterial::uses_shift: where it says the footprint's sample shift is
+// not read (near field; a multi-scale footprint of a cell or more, read
+// from the class table, of a one-colour pattern), shade() and
+// transmittance() give the same bits for any shift, so the renderer may
+// skip drawing it; where it says the shift is read, it does change results.
+TEST(FootprintTable, ShiftIsReadOnlyWhereTheMaterialSaysSo) {
+  std::mt19937 rng(10);
+  std::uniform_real_distribution<float> U(0, 1);
+  KnitMaterialParams ms;
+  ms.mode = KnitMode::MultiScale;
+  KnitMaterialParams nf;
+  KnitMaterialParams ms2 = ms;  // two yarn colours
+  ms2.bsdf.reflect_colors = {Rgb{0.8f, 0.7f, 0.6f}, Rgb{0.2f, 0.3f, 0.7f}};
+  ms2.bsdf.transmit_colors = ms2.bsdf.reflect_colors;
+  std::vector<std::vector<int>> codes = {{0, 0, 1, 1}, {0, 0, 1, 1}}, colours = {{0, 0, 0, 0}, {0, 1, 0, 1}};
+  const KnitMaterial one(Pattern::from_rows(codes), ms), two(Pattern::from_rows(codes, colours), ms2),
+      near(Pattern::from_rows(codes), nf);
+  int unread = 0, read_differs = 0, read = 0;
+  for (int i = 0; i < 400; ++i) {
+    BaseHit hit;
+    hit.u = U(rng);
+    hit.v = U(rng);
+    // below a cell (marched), a few cells (visited or counted), and boxes of
+    // more than KNIT_MS_MAX_POINTS cells (several colours: their points)
+    const float cells = i % 4 == 3 ? 10 + 20 * U(rng) : 0.2f + 6 * U(rng);
+    hit.dudx = cells * 6.2831853f / ms.uv_scale;
+    hit.dvdy = cells * 4.5f / ms.uv_scale;
+    const Vec3 dir = k::kv3_normalize(k::kv3(U(rng) - 0.5f, U(rng) - 0.5f, -1.0f));
+    const std::array<float, 2> s1 = {U(rng), U(rng)}, s2 = {U(rng), U(rng)};
+    for (const KnitMaterial* m : {&one, &two, &near}) {
+      const KnitShade a = m->shade(hit, dir, nullptr, s1), b = m->shade(hit, dir, nullptr, s2);
+      const float ta = m->transmittance(hit, dir, nullptr, s1), tb = m->transmittance(hit, dir, nullptr, s2);
+      const bool same = a.point.p_delta == b.point.p_delta && a.sn.x == b.sn.x && a.sn.z == b.sn.z &&
+                        a.st.y == b.st.y && a.kd_r.r == b.kd_r.r && a.kd_r.g == b.kd_r.g &&
+                        a.point.color == b.point.color && a.offset.z == b.offset.z && ta == tb;
+      if (!m->uses_shift(hit)) {
+        ASSERT_TRUE(same) << "hit " << i << ", " << cells << " cells: the shift changed what uses_shift says is not read";
+        ++unread;
+      } else {
+        ++read;
+        read_differs += same ? 0 : 1;
+      }
+    }
+  }
+  EXPECT_FALSE(near.uses_shift(BaseHit{}));
+  EXPECT_GT(unread, 400);       // the one-colour table footprints and the near field
+  EXPECT_GT(read_differs, 50);  // the marched footprints and the two-colour picks do read it
+  std::printf("[ shift ] %d shadings where it is not read, %d where it is (%d of them changed by it)\n", unread,
+              read, read_differs);
+}
+
 // Grazing rays have huge ray differentials (clamped to 1e5 cells per axis by
 // knit_footprint): the table counts the 1e10 cells of such a box by pattern
 // repeats (never one by one), reports the footprint's points, not its

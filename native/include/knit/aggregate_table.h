@@ -89,6 +89,9 @@ class FootprintTable {
     if (!class_counts(f, counts)) counts.fill(-1);
     return counts;
   }
+  // Whether aggregate() and p_delta() read no footprint points (and so no
+  // sample shift): one colour index, and cells counted per class.
+  bool counts_without_points() const { return one_colour_ && (single_class_ >= 0 || !prefix_.empty()); }
   int period_rows() const { return period_rows_; }
   int period_cols() const { return period_cols_; }
 

@@ -88,6 +88,12 @@ class KnitMaterial {
   KnitShade shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
                   std::array<float, 2> shift = {0.5f, 0.5f}) const;
 
+  // Whether shade() and transmittance() at this hit read their `shift`:
+  // only multi-scale footprints that are marched, or read from the class
+  // table for their colours or points. A renderer may skip drawing it
+  // otherwise (the results are the same for any shift).
+  bool uses_shift(const BaseHit& hit) const;
+
   // Fraction of light a shadow ray along ray_dir passes through the fabric
   // here: near-field 0 or 1 (a gap or a yarn), multi-scale p_delta.
   float transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
