@@ -366,9 +366,10 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
   int cand_k[KNIT_QUERY_MAX_CAND], cand_g[KNIT_QUERY_MAX_CAND];
   int ncand = 0;
   int next_bi = -1; /* FIRST: the candidate to visit next, when known */
-  /* The span of the last candidate: pieces of one cell share it. */
+  /* The span of the last candidate (row sp.rw.k, column sp.c, once have_sp):
+   * pieces of one cell share it. */
   KSpan sp;
-  int sp_k = 0, sp_c = 0, have_sp = 0;
+  int have_sp = 0;
   int first = mode == KNIT_QUERY_FIRST || mode == KNIT_QUERY_ANY ? 1 : 0; /* ordered search */
   /* The exact piece bounds refine only z (and slip-stitch floats): skip
    * them when the segment is vertical and spans the whole shell in z (FIRST
@@ -435,10 +436,8 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
         t_start = qx.t0 + KX(cu) * KNIT_PIECE_LEN;
       }
       c = knit_piece_column(gp);
-      if (have_sp == 0 || sp_k != k || sp_c != c) {
+      if (have_sp == 0 || sp.rw.k != k || sp.c != c) {
         sp = knit_span(g, codes, rw, c);
-        sp_k = k;
-        sp_c = c;
         have_sp = 1;
       }
       if (skip_exact == 0) {
@@ -504,10 +503,8 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
      * renders it culled a fifth of these candidates at twice the cost of the
      * closest points it saved. */
     c = knit_piece_column(cand_g[bi]);
-    if (have_sp == 0 || sp_k != cand_k[bi] || sp_c != c) {
+    if (have_sp == 0 || sp.rw.k != cand_k[bi] || sp.c != c) {
       sp = knit_span(g, codes, knit_row(g, cand_k[bi]), c);
-      sp_k = cand_k[bi];
-      sp_c = c;
       have_sp = 1;
     }
     t = knit_piece_closest_t(g, codes, sp, cand_g[bi], o, D, m);

@@ -285,11 +285,11 @@ void FootprintTable::for_each_cell(const KnitSurface& surface, const k::KFootpri
 bool FootprintTable::class_counts(const k::KFootprint& f,
                                   std::array<double, kClasses>& counts) const {
   counts.fill(0);
+  if (!can_count()) return false;
   if (single_class_ >= 0) {
     counts[size_t(single_class_)] = double(f.ncx) * f.ncy;
     return true;
   }
-  if (prefix_.empty()) return false;
   // Over one period of the class matrix (period_rows_ x period_cols_, which
   // divide the pattern's rows and columns: the same counts as over the
   // pattern, k::knit_cell_index's row order included).

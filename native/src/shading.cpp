@@ -214,8 +214,8 @@ bool KnitMaterial::uses_shift(const BaseHit& hit) const {
   if (!table_ || !table_->counts_without_points()) return true;
   // From the class table (the same test as shade's) with no points: only a
   // marched footprint reads the shift.
-  const float us = params_.uv_scale;
-  const Vec3 fx = k::kv3(us * hit.dudx, us * hit.dvdx, 0), fy = k::kv3(us * hit.dudy, us * hit.dvdy, 0);
+  Vec3 fx, fy;
+  footprint_axes(hit, fx, fy);
   return k::knit_footprint_stratified(surface_.geom(), fx, fy) == 0;
 }
 
@@ -230,8 +230,8 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
   const float top = surface_.shell_top();
 
   if (params_.mode == KnitMode::MultiScale) {
-    const float us = params_.uv_scale;
-    const Vec3 fx = k::kv3(us * hit.dudx, us * hit.dvdx, 0), fy = k::kv3(us * hit.dudy, us * hit.dvdy, 0);
+    Vec3 fx, fy;
+    footprint_axes(hit, fx, fy);
     const int points = footprint_points_for(fx, fy);
     const k::KFootprint f = k::knit_footprint(surface_.geom(), x, y, fx, fy, points, shift[0], shift[1]);
     k::KnitAggregate a;
@@ -387,7 +387,8 @@ float KnitMaterial::transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameP
     const float S = hit.pattern_per_world, us = params_.uv_scale;
     const float x = us * hit.u, y = us * hit.v;
     const Vec3 wi = k::kv3_neg(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n));
-    const Vec3 fx = k::kv3(us * hit.dudx, us * hit.dvdx, 0), fy = k::kv3(us * hit.dudy, us * hit.dvdy, 0);
+    Vec3 fx, fy;
+    footprint_axes(hit, fx, fy);
     const k::KFootprint f =
         k::knit_footprint(surface_.geom(), x, y, fx, fy, footprint_points_for(fx, fy), shift[0], shift[1]);
     if (table_ && f.stratified) return table_->p_delta(surface_, f, wi);

@@ -91,7 +91,7 @@ class FootprintTable {
   }
   // Whether aggregate() and p_delta() read no footprint points (and so no
   // sample shift): one colour index, and cells counted per class.
-  bool counts_without_points() const { return one_colour_ && (single_class_ >= 0 || !prefix_.empty()); }
+  bool counts_without_points() const { return one_colour_ && can_count(); }
   int period_rows() const { return period_rows_; }
   int period_cols() const { return period_cols_; }
 
@@ -145,6 +145,8 @@ class FootprintTable {
   // the pattern's rows for a box of any height) instead of a visit per cell;
   // false when there are no prefix counts (a pattern too large for them).
   bool class_counts(const k::KFootprint& f, std::array<double, kClasses>& counts) const;
+  // Whether class_counts can count (one class, or prefix counts).
+  bool can_count() const { return single_class_ >= 0 || !prefix_.empty(); }
   // p_delta of cells counted by class (1 for none), seen from direction d.
   float pass_of(const std::array<double, kClasses>& counts, const DirWeights& d) const;
 

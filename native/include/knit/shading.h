@@ -135,6 +135,13 @@ class KnitMaterial {
   void shade_yarn(const BaseHit& hit, const k::KnitLineHit& h, const FrameProvider* frame, KnitShade& sh) const;
   // Points marched over a footprint spanned by fx, fy (pattern units).
   int footprint_points_for(Vec3 fx, Vec3 fy) const;
+  // The hit's pixel footprint in pattern space: the spanning vectors of its
+  // UV differentials, times uv_scale.
+  void footprint_axes(const BaseHit& hit, Vec3& fx, Vec3& fy) const {
+    const float us = params_.uv_scale;
+    fx = k::kv3(us * hit.dudx, us * hit.dvdx, 0);
+    fy = k::kv3(us * hit.dudy, us * hit.dvdy, 0);
+  }
   void set_colors(KnitShade& sh, int color_index) const;
   // Palette mixed by a footprint's colour histogram (KNIT_MS_COLORS bins).
   void mix_colors(KnitShade& sh, const float* weights) const;
