@@ -78,10 +78,15 @@ class Bench:
         os.makedirs(out, exist_ok=True)
         self.results = {"machine": os.uname().nodename, "cpus": os.cpu_count(), "started": time.ctime()}
 
-    def render(self, tag, scene, spp, seed=1, explicit=False):
+    def scene_file(self, tag, scene):
+        """Writes the scene to OUT_DIR/tag.json (for the CLI, and to look at later); returns its path."""
         path = os.path.join(self.out, tag + ".json")
         with open(path, "w") as f:
             json.dump(scene, f, indent=1)
+        return path
+
+    def render(self, tag, scene, spp, seed=1, explicit=False):
+        path = self.scene_file(tag, scene)
         img = os.path.join(self.out, f"{tag}_{spp}_{seed}.exr")
         rep = os.path.join(self.out, f"{tag}_{spp}_{seed}.report.json")
         cmd = [self.cli, "render", path, "-o", img, "--spp", str(spp), "--seed", str(seed), "--quiet",
@@ -99,9 +104,7 @@ class Bench:
 
     def mask(self, tag, scene, obj):
         """Coverage mask of object `obj` (knitshade render --mask-object), for errors over the fabric alone."""
-        path = os.path.join(self.out, tag + ".json")
-        with open(path, "w") as f:
-            json.dump(scene, f, indent=1)
+        path = self.scene_file(tag, scene)
         img = os.path.join(self.out, tag + "_mask.exr")
         subprocess.run([self.cli, "render", path, "-o", img, "--spp", "64", "--quiet", "--mask-object", obj],
                        check=True)
@@ -213,7 +216,6 @@ class Bench:
               f"{len(tk)}), ratio {res['ratio']:.2f} (of medians {res['ratio_of_medians']:.2f})", flush=True)
         return res
 
-
     # The render loop's lambda in knit::render::render_image: callgrind counts from its entry only, so
     # parsing, the class table's build and image output stay out of the count.
     RENDER_LOOP = ("knit::render::render_image(knit::render::Scene const&, knit::render::RenderSettings "
@@ -226,9 +228,7 @@ class Bench:
         print(f"instructions: {name}", flush=True)
         counts = {}
         for label, sc in (("knit", scene), ("diffuse", diffuse_twin(scene))):
-            path = os.path.join(self.out, f"{name}_{label}_instr.json")
-            with open(path, "w") as f:
-                json.dump(sc, f, indent=1)
+            path = self.scene_file(f"{name}_{label}_instr", sc)
             cmd = ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
                    "--toggle-collect=" + self.RENDER_LOOP, self.cli, "render", path, "-o",
                    os.path.join(self.out, f"{name}_{label}_instr.exr"), "--spp", str(spp), "--threads", "1",
