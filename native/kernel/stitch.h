@@ -414,7 +414,7 @@ KNIT_FN KBox knit_piece_bounds_xy(KNIT_IN(KnitGeom) g, float yk, int gp) {
 KNIT_FN int knit_piece_neighbour(int j) { return j == 0 ? -1 : (j == 7 ? 1 : 0); }
 
 /* Column of global piece gp. */
-KNIT_FN int knit_piece_column(int gp) { return KINT(k_floor(KFLT(gp) / KF(8.0))); }
+KNIT_FN int knit_piece_column(int gp) { return (gp - (gp & 7)) / 8; } /* exact: a multiple of 8 */
 
 /* Conservative bounds of the exact curve of span sp's row over global piece
  * gp of its centre column. A blended piece lies in the union of both
