@@ -211,6 +211,25 @@ TEST(Stitch, ShellTopBoundsEveryTube) {
   }
 }
 
+// A global piece's column is floor(gp / 8), computed in integers: for
+// negative pieces too, and for every piece a query can reach (|x| up to
+// KNIT_MAX_COORD plus a stitch).
+TEST(Stitch, PieceColumnIsTheFloorOfAnEighth) {
+  const int reach = int(std::ceil(double(KNIT_MAX_COORD) / (kPi / 4))) + 64;
+  std::vector<int> gps;
+  for (int gp = -300; gp <= 300; ++gp) gps.push_back(gp);
+  for (int base : {reach, -reach, 1 << 20, -(1 << 20)})
+    for (int d = -20; d <= 20; ++d) gps.push_back(base + d);
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> U(-reach, reach);
+  for (int i = 0; i < 100000; ++i) gps.push_back(U(rng));
+  for (int gp : gps) {
+    const int want = int(std::floor(double(gp) / 8.0));
+    ASSERT_EQ(k::knit_piece_column(gp), want) << "gp = " << gp;
+    ASSERT_EQ(gp - 8 * k::knit_piece_column(gp), gp & 7) << "gp = " << gp;  // the piece's place in its cell
+  }
+}
+
 // The kernel's line query reports a miss, in bounded work, for points beyond
 // KNIT_MAX_COORD and for non-finite ones (the hosts reject both earlier); a
 // point of the same stitch one period nearer the origin is still a hit.
