@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <mutex>
@@ -80,18 +81,36 @@ RenderResult render_image(const Scene& scene, const RenderSettings& settings) {
     }
   };
 
+  const std::vector<int> order = tile_order(tiles_x * tiles_y);
   const auto t0 = std::chrono::steady_clock::now();
   tbb::task_arena arena(result.threads);
   arena.execute([&] {
     tbb::parallel_for(tbb::blocked_range<int>(0, tiles_x * tiles_y, 1),
                       [&](const tbb::blocked_range<int>& r) {
-                        for (int t = r.begin(); t != r.end(); ++t) render_tile(t);
+                        for (int i = r.begin(); i != r.end(); ++i) render_tile(order[size_t(i)]);
                       },
                       tbb::simple_partitioner());
   });
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   progress.finish();
   return result;
+}
+
+std::vector<int> tile_order(int tiles) {
+  std::vector<int> order(size_t(std::max(0, tiles)));
+  for (size_t i = 0; i < order.size(); ++i) order[i] = int(i);
+  // Fisher-Yates with a fixed splitmix64 stream (std::shuffle's draws differ
+  // between standard libraries; this order is the same everywhere).
+  uint64_t state = 0x6b6e697473686164ull;
+  for (size_t i = order.size(); i > 1; --i) {
+    state += 0x9e3779b97f4a7c15ull;
+    uint64_t z = state;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    z ^= z >> 31;
+    std::swap(order[i - 1], order[size_t(z % i)]);
+  }
+  return order;
 }
 
 }  // namespace knit::render

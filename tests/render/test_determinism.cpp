@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <vector>
 
 #include "render_test_util.h"
 
@@ -53,6 +54,36 @@ TEST(Determinism, AnotherSeedGivesAnotherImage) {
   const auto a = test::render_text(dir, scene(3), 2);
   const auto b = test::render_text(dir, scene(4), 2);
   EXPECT_FALSE(identical(a.image, b.image));
+}
+
+// The tiles are visited in a fixed shuffled order (render_image's images do
+// not depend on it: the tests above), so that the share of the work done
+// tracks the share of tiles done, which is what the progress ETA assumes.
+TEST(TileOrder, IsAFixedPermutationWhosePrefixesSampleTheFrameEvenly) {
+  EXPECT_TRUE(tile_order(0).empty());
+  EXPECT_EQ(tile_order(1), std::vector<int>{0});
+  const int tx = 30, ty = 17, n = tx * ty;  // the demo's 480 x 270 in 16-pixel tiles
+  const std::vector<int> order = tile_order(n);
+  EXPECT_EQ(order, tile_order(n)) << "the order must not change between calls";
+  std::vector<int> seen(size_t(n), 0);
+  for (int t : order) {
+    ASSERT_GE(t, 0);
+    ASSERT_LT(t, n);
+    ++seen[size_t(t)];
+  }
+  for (int c : seen) ASSERT_EQ(c, 1) << "not a permutation";
+  // The demo's cost: its knits fill the lower half of the frame, the sky above
+  // costs next to nothing. After each tenth of the tiles, the share of that
+  // cost done must be near a tenth as well (in raster order it stays 0 until
+  // half the tiles are done).
+  double total = 0;
+  for (int t = 0; t < n; ++t) total += (t / tx) >= ty / 2 ? 1.0 : 0.0;
+  double done = 0;
+  for (int i = 0; i < n; ++i) {
+    done += (order[size_t(i)] / tx) >= ty / 2 ? 1.0 : 0.0;
+    if ((i + 1) % (n / 10) == 0)
+      EXPECT_NEAR(done / total, double(i + 1) / n, 0.1) << "after " << i + 1 << " of " << n << " tiles";
+  }
 }
 
 }  // namespace
