@@ -9,8 +9,10 @@
 #include <chrono>
 #include <cmath>
 #include <mutex>
+#include <numeric>
 
 #include "render/camera.h"
+#include "render/rng.h"
 
 namespace knit::render {
 
@@ -98,17 +100,13 @@ RenderResult render_image(const Scene& scene, const RenderSettings& settings) {
 
 std::vector<int> tile_order(int tiles) {
   std::vector<int> order(size_t(std::max(0, tiles)));
-  for (size_t i = 0; i < order.size(); ++i) order[i] = int(i);
+  std::iota(order.begin(), order.end(), 0);
   // Fisher-Yates with a fixed splitmix64 stream (std::shuffle's draws differ
   // between standard libraries; this order is the same everywhere).
   uint64_t state = 0x6b6e697473686164ull;
   for (size_t i = order.size(); i > 1; --i) {
-    state += 0x9e3779b97f4a7c15ull;
-    uint64_t z = state;
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    z ^= z >> 31;
-    std::swap(order[i - 1], order[size_t(z % i)]);
+    std::swap(order[i - 1], order[size_t(mix64(state) % i)]);
+    state += 0x9e3779b97f4a7c15ull;  // the stream: mix64 of key, key + step, key + 2 step, ...
   }
   return order;
 }
