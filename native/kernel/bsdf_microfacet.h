@@ -183,6 +183,56 @@ KNIT_FN float mf_pdf_up(KNIT_IN(KMicrofacet) m, kvec3 o, kvec3 i) {
   return mf_refl_pdf_up(ax, ay, o, kv3_normalize(hs));
 }
 
+/* mf_eval_up and mf_pdf_up together (transmit as there): the half vector,
+ * D(h) and Lambda(o) are computed once. The same values, bit for bit. */
+KNIT_STRUCT(KMfEvalPdf)
+  float f;   /* mf_eval_up(m, o, i, transmit) */
+  float pdf; /* mf_pdf_up(m, o, i) */
+KNIT_STRUCT_END(KMfEvalPdf)
+
+KNIT_FN KMfEvalPdf mf_eval_pdf_up(KNIT_IN(KMicrofacet) m, kvec3 o, kvec3 i, int transmit) {
+  float ax = k_fmax(m.alpha_x, KB_ALPHA_MIN);
+  float ay = k_fmax(m.alpha_y, KB_ALPHA_MIN);
+  kvec3 hs = kv3_add(o, i);
+  kvec3 h;
+  float d, lo, dp, den, fr, fac;
+  KMfEvalPdf r;
+  r.f = KF(0.0);
+  r.pdf = KF(0.0);
+  if (KZ(o) <= KF(0.0) || KZ(i) <= KF(0.0) || kv3_len2(hs) <= KF(0.0)) return r;
+  h = kv3_normalize(hs);
+  d = mf_ggx_d(ax, ay, h);
+  lo = mf_ggx_zlambda(ax, ay, o);
+  dp = KZ(o) + lo;
+  if (dp > KF(0.0)) r.pdf = d / (KF(4.0) * dp);
+  den = KZ(o) * KZ(i) + KZ(i) * lo + KZ(o) * mf_ggx_zlambda(ax, ay, i);
+  if (den > KF(0.0)) {
+    fr = kb_fresnel_dielectric(kv3_dot(o, h), m.eta);
+    fac = transmit != 0 ? (KF(1.0) - fr) * (KF(1.0) - fr) : fr;
+    r.f = fac * (d / (KF(4.0) * den)) * KZ(i);
+  }
+  return r;
+}
+
+/* The direction alone of mf_sample_up (for a mixture that weighs its samples
+ * itself): the same wi, and a failure (pdf 0) in the same cases but one, an
+ * underflow of o.z i.z to 0 (then mf_sample_up fails and the mixture's eval
+ * of the lobe is 0). pdf is 1 on success: not a density. */
+KNIT_FN KBsdfSample mf_sample_dir_up(KNIT_IN(KMicrofacet) m, kvec3 o, float u1, float u2) {
+  float ax = k_fmax(m.alpha_x, KB_ALPHA_MIN);
+  float ay = k_fmax(m.alpha_y, KB_ALPHA_MIN);
+  kvec3 h, i;
+  float oh;
+  if (KZ(o) <= KF(0.0)) return kb_sample_fail(o);
+  h = mf_ggx_sample_vndf(ax, ay, o, u1, u2);
+  oh = kv3_dot(o, h);
+  /* h.z > 0 is mf_sample_up's pdf > 0: D(h) > 0 exactly when h.z > 0 */
+  if (oh <= KF(0.0) || KZ(h) <= KF(0.0)) return kb_sample_fail(o);
+  i = kv3_normalize(kv3_sub(kv3_scale(h, KF(2.0) * oh), o));
+  if (KZ(i) <= KF(0.0)) return kb_sample_fail(o);
+  return kb_sample_make(i, kv3(KF(1.0), KF(1.0), KF(1.0)), KF(1.0), KB_REFLECT);
+}
+
 /* Sample of the upper-hemisphere reflection configuration from o (o.z > 0);
  * the returned wi has wi.z > 0 (the caller mirrors it for transmission). */
 KNIT_FN KBsdfSample mf_sample_up(KNIT_IN(KMicrofacet) m, kvec3 o, float u1, float u2, int transmit) {

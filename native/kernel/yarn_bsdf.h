@@ -76,6 +76,7 @@ KNIT_STRUCT(KYarnLobeProbs)
   float p1; /* specular transmission */
   float p2; /* body reflection */
   float p3; /* body transmission */
+  float fo; /* F(|wo.z|) of the yarn surface, for yarn_bsdf_eval_pdf_with */
 KNIT_STRUCT_END(KYarnLobeProbs)
 
 KNIT_FN KYarnBsdf yarn_bsdf_make(KNIT_IN(KMicrofacet) spec_r, KNIT_IN(KMicrofacet) spec_t, kvec3 kd_r, kvec3 kd_t,
@@ -116,6 +117,7 @@ KNIT_FN KYarnLobeProbs yarn_bsdf_lobe_probs(KNIT_IN(KYarnBsdf) p, kvec3 wo) {
   q.p1 = w1 * inv;
   q.p2 = w2 * inv;
   q.p3 = w3 * inv;
+  q.fo = fo;
   return q;
 }
 
@@ -175,16 +177,54 @@ KNIT_FN float yarn_bsdf_lobe_prob(KNIT_IN(KYarnLobeProbs) q, int lobe) {
   return lobe == 0 ? q.p0 : (lobe == 1 ? q.p1 : (lobe == 2 ? q.p2 : q.p3));
 }
 
+/* yarn_bsdf_eval and yarn_bsdf_pdf_with at (wo, wi) in one pass, q from
+ * yarn_bsdf_lobe_probs(p, wo) (with its F(|wo.z|)): the microfacet lobe's
+ * half vector, D and Lambda are shared by its eval and pdf. The same values,
+ * bit for bit (tests/native/test_bsdf_yarn.cpp). */
+KNIT_STRUCT(KYarnEvalPdf)
+  kvec3 f;   /* yarn_bsdf_eval(p, wo, wi) */
+  float pdf; /* yarn_bsdf_pdf_with(p, q, wo, wi) */
+KNIT_STRUCT_END(KYarnEvalPdf)
+
+KNIT_FN KYarnEvalPdf yarn_bsdf_eval_pdf_with(KNIT_IN(KYarnBsdf) p, KNIT_IN(KYarnLobeProbs) q, kvec3 wo, kvec3 wi) {
+  float b = p.body_energy;
+  float r = p.body_reflect;
+  float s = kb_side(wo);
+  float body;
+  KMfEvalPdf mf;
+  KYarnEvalPdf e;
+  e.f = KB_BLACK;
+  e.pdf = KF(0.0);
+  if (KZ(wo) * KZ(wi) == KF(0.0)) return e;
+  body = b * p.shadow * (KF(1.0) - q.fo) * (KF(1.0) - kb_fresnel_dielectric(k_fabs(KZ(wi)), p.spec_r.eta));
+  if (KZ(wo) * KZ(wi) > KF(0.0)) {
+    mf = mf_eval_pdf_up(p.spec_r, kb_flip_z(wo, s), kb_flip_z(wi, s), 0);
+    e.f = kv3_add(kv3(mf.f, mf.f, mf.f), kv3_scale(bsdf_ls_eval(bsdf_ls_make(p.kd_r), wo, wi), r * body));
+    e.pdf = q.p0 * mf.pdf + q.p2 * bsdf_ls_pdf(bsdf_ls_make(p.kd_r), wo, wi);
+    return e;
+  }
+  mf = mf_eval_pdf_up(p.spec_t, kb_flip_z(wo, s), kb_flip_z(wi, -s), 1);
+  e.f = kv3_scale(kv3_add(kv3_scale(kv3(mf.f, mf.f, mf.f), KF(1.0) - b),
+                          kv3_scale(bsdf_lt_eval(bsdf_lt_make(p.kd_t), wo, wi), (KF(1.0) - r) * body)),
+                  bsdf_att_tau(p.atten, wo, wi));
+  e.pdf = q.p1 * mf.pdf + q.p3 * bsdf_lt_pdf(bsdf_lt_make(p.kd_t), wo, wi);
+  return e;
+}
+
 /* Chooses a lobe with u1 (rescaled and reused), samples it with (u1', u2),
- * and returns wi with weight = eval / pdf and the mixture pdf. */
+ * and returns wi with weight = eval / pdf and the mixture pdf. A microfacet
+ * lobe gives only the direction (mf_sample_dir_up): the mixture's eval and
+ * pdf are computed once, for all lobes together. */
 KNIT_FN KBsdfSample yarn_bsdf_sample(KNIT_IN(KYarnBsdf) p, kvec3 wo, float u1, float u2) {
   KYarnLobeProbs q = yarn_bsdf_lobe_probs(p, wo);
   float c1 = q.p0;
   float c2 = c1 + q.p1;
   float c3 = c2 + q.p2;
-  float start, pk, ur, pdf;
+  float side = kb_side(wo);
+  float start, pk, ur;
   int k = 3;
   KBsdfSample s;
+  KYarnEvalPdf e;
   if (c3 + q.p3 <= KF(0.0) || KZ(wo) == KF(0.0)) return kb_sample_fail(wo);
   if (u1 < c3) k = 2;
   if (u1 < c2) k = 1;
@@ -194,18 +234,22 @@ KNIT_FN KBsdfSample yarn_bsdf_sample(KNIT_IN(KYarnBsdf) p, kvec3 wo, float u1, f
   pk = yarn_bsdf_lobe_prob(q, k);
   ur = k_clampf((u1 - start) / pk, KF(0.0), KF(0.99999994));
   if (k == YB_LOBE_SPEC_R) {
-    s = bsdf_mf_reflect_sample(p.spec_r, wo, ur, u2);
+    s = mf_sample_dir_up(p.spec_r, kb_flip_z(wo, side), ur, u2);
+    s.wi = kb_flip_z(s.wi, side);
+    s.flags = KB_REFLECT;
   } else if (k == YB_LOBE_SPEC_T) {
-    s = bsdf_mf_transmit_sample(p.spec_t, wo, ur, u2);
+    s = mf_sample_dir_up(p.spec_t, kb_flip_z(wo, side), ur, u2);
+    s.wi = kb_flip_z(s.wi, -side);
+    s.flags = KB_TRANSMIT;
   } else if (k == YB_LOBE_BODY_R) {
     s = bsdf_ls_sample(bsdf_ls_make(p.kd_r), wo, ur, u2);
   } else {
     s = bsdf_lt_sample(bsdf_lt_make(p.kd_t), wo, ur, u2);
   }
   if (s.pdf <= KF(0.0)) return kb_sample_fail(wo);
-  pdf = yarn_bsdf_pdf_with(p, q, wo, s.wi);
-  if (pdf <= KF(0.0)) return kb_sample_fail(wo);
-  return kb_sample_make(s.wi, kv3_scale(yarn_bsdf_eval(p, wo, s.wi), KF(1.0) / pdf), pdf, s.flags);
+  e = yarn_bsdf_eval_pdf_with(p, q, wo, s.wi);
+  if (e.pdf <= KF(0.0)) return kb_sample_fail(wo);
+  return kb_sample_make(s.wi, kv3_scale(e.f, KF(1.0) / e.pdf), e.pdf, s.flags);
 }
 
 /* ---- With delta transmission through gaps (bsdf_delta.h) ------------------ */

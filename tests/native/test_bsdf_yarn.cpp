@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -167,6 +168,52 @@ TEST(BsdfYarn, SampleAgreesWithEvalAndPdf) {
   EXPECT_GT(transmit, 10000);
   EXPECT_LT(worst_p, 1e-6);
   EXPECT_LT(worst_w, 1e-5);
+}
+
+// The sampler's one-pass eval and pdf (yarn_bsdf_eval_pdf_with) and its
+// direction-only microfacet sample (mf_sample_dir_up) are shortcuts: they
+// must give what the separate functions give, bit for bit, grazing and
+// degenerate directions included.
+TEST(BsdfYarn, OnePassEvalPdfAndDirectionOnlySampleAreTheSeparateFunctions) {
+  Rng rng(41);
+  int compared = 0, refl = 0, trans = 0, zero = 0, dir_ok = 0, dir_fail = 0;
+  for (int i = 0; i < 200000; ++i) {
+    k::KYarnBsdf p = random_yarn(rng);
+    Vec3 wo = uniform_sphere(rng), wi = uniform_sphere(rng);
+    if (i % 10 == 1) wo.z = (rng.uniform() - 0.5f) * 1e-6f;  // grazing
+    if (i % 10 == 2) wi.z = 0;                              // in the tangent plane
+    if (i % 10 == 3) wi = Vec3{-wo.x, -wo.y, -wo.z};        // straight through
+    const k::KYarnLobeProbs q = k::yarn_bsdf_lobe_probs(p, wo);
+    const k::KYarnEvalPdf e = k::yarn_bsdf_eval_pdf_with(p, q, wo, wi);
+    const Vec3 f = k::yarn_bsdf_eval(p, wo, wi);
+    const float pdf = k::yarn_bsdf_pdf_with(p, q, wo, wi);
+    ASSERT_EQ(std::memcmp(&e.f, &f, sizeof f), 0) << "eval at sample " << i;
+    ASSERT_EQ(std::memcmp(&e.pdf, &pdf, sizeof pdf), 0) << "pdf at sample " << i;
+    ++compared;
+    (pdf == 0 ? zero : (wo.z * wi.z > 0 ? refl : trans))++;
+
+    // The microfacet lobes' samples from the upper side: the same direction,
+    // failing in the same cases.
+    const k::KMicrofacet m = rng.uniform() < 0.5f ? p.spec_r : p.spec_t;
+    const Vec3 o{wo.x, wo.y, std::fabs(wo.z)};
+    const float u1 = rng.uniform(), u2 = rng.uniform();
+    const k::KBsdfSample full = k::mf_sample_up(m, o, u1, u2, 0);
+    const k::KBsdfSample dir = k::mf_sample_dir_up(m, o, u1, u2);
+    ASSERT_EQ(full.pdf > 0, dir.pdf > 0) << "sample " << i;
+    if (full.pdf > 0) {
+      ASSERT_EQ(std::memcmp(&full.wi, &dir.wi, sizeof full.wi), 0) << "direction at sample " << i;
+      ++dir_ok;
+    } else {
+      ++dir_fail;
+    }
+  }
+  std::printf("[one pass] %d eval/pdf pairs identical (%d R, %d T, %d zero); %d microfacet samples the same "
+              "direction, %d failing in both\n",
+              compared, refl, trans, zero, dir_ok, dir_fail);
+  EXPECT_GT(refl, 50000);
+  EXPECT_GT(trans, 50000);
+  EXPECT_GT(zero, 10000);
+  EXPECT_GT(dir_fail, 100);  // the failure cases were reached
 }
 
 TEST(BsdfYarn, LobeProbabilitiesFollowTheParameters) {
