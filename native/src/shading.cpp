@@ -2,6 +2,7 @@
 #include "knit/shading.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -100,8 +101,11 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
   // with the loops beside them, which the classes do not describe (p_delta
   // off by up to 0.075 on heel stitch, docs/multiscale.md); those patterns
   // keep the marched aggregate.
-  if (params_.mode == KnitMode::MultiScale && params_.footprint_table && surface_.geom().has_floats == 0)
+  if (params_.mode == KnitMode::MultiScale && params_.footprint_table && surface_.geom().has_floats == 0) {
+    const auto t0 = std::chrono::steady_clock::now();
     table_ = std::make_shared<const FootprintTable>(surface_, params_.capm_options);
+    table_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
 }
 
 size_t KnitMaterial::state_bytes() const {

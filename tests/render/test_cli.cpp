@@ -141,7 +141,30 @@ TEST(Cli, RendersKnitWithTheModelAndAsExplicitYarns) {
   EXPECT_GT(re["memory_bytes"]["yarn_geometry"].get<uint64_t>(), 16 * re["knit"]["yarn_points"].get<uint64_t>() - 1);
   EXPECT_GT(re["memory_bytes"]["embree_yarns"].get<int64_t>(), 0);
   EXPECT_EQ(re["triangles"], 0);  // the base mesh is replaced by the tubes
+  EXPECT_EQ(rm["seconds"]["knit_tables"], 0.0);  // near field: nothing built
+}
 
+TEST(Cli, ReportsTheClassTableBuildApartFromParsing) {
+  // A multi-scale knit builds its class table while the scene is parsed:
+  // the report gives that time its own entry, and the parts still add up.
+  const std::string dir = test::test_dir();
+  const std::string scene = test::write_file(
+      dir, "scene.json",
+      small_scene(R"({"type": "knit", "pattern": ["KP", "PK"], "uv_scale": 40, "mode": "multi_scale", "yarn_colors": [[0.7, 0.1, 0.1]]})"));
+  const CliRun r = run(dir, "render " + scene + " -o " + dir + "/ms.exr --report " + dir + "/ms.json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json rep = nlohmann::json::parse(test::read_file(dir + "/ms.json"));
+  const nlohmann::json& s = rep["seconds"];
+  const double tables = s["knit_tables"].get<double>();
+  // Seed stitch: several classes, hundreds of thousands of marched rays, never 0 s.
+  EXPECT_GT(tables, 0.0);
+  double parts = 0;
+  for (const char* k : {"parse", "knit_tables", "load", "build", "render", "write"}) {
+    EXPECT_GE(s[k].get<double>(), 0.0) << k;
+    parts += s[k].get<double>();
+  }
+  EXPECT_LE(parts, s["total"].get<double>() + 1e-6);
+  EXPECT_NE(r.out.find("knit class tables"), std::string::npos) << r.out;
 }
 
 TEST(Cli, CompareReportsLinearErrors) {

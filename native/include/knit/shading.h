@@ -117,6 +117,9 @@ class KnitMaterial {
   // multi-scale footprint table (bytes).
   size_t state_bytes() const;
   const FootprintTable* footprint_table() const { return table_.get(); }
+  // Wall time the constructor spent building the multi-scale class table
+  // (0 without one): most of a multi-scale material's set-up.
+  double table_seconds() const { return table_seconds_; }
 
  private:
   k::KnitCapm march(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame, bool blocked_only = false) const;
@@ -151,6 +154,7 @@ class KnitMaterial {
   YarnBsdf bsdf_;
   PlyProfile ply_;
   std::shared_ptr<const FootprintTable> table_;  // multi-scale with footprint_table: built at construction
+  double table_seconds_ = 0;  // what table_seconds() returns
   float arc_per_t_ = 1;     // mean arc length of the yarn per unit of curve parameter
   float mean_shadow_ = 1;   // ply shadow averaged around and along the yarn
   KnitShade unshaded_;      // what unshaded() returns, set up once
