@@ -95,7 +95,7 @@ constexpr double kMaxTwistDeg = 80.2;
 
 }  // namespace
 
-KnitDesc parse_knit_material(JsonObject& o, const std::string& dir) {
+KnitDesc parse_knit_material(JsonObject& o, const std::string& dir, bool class_tables) {
   KnitDesc k;
   const std::string& file = o.node().file();
   JsonNode pat = o.at("pattern");
@@ -209,6 +209,8 @@ KnitDesc parse_knit_material(JsonObject& o, const std::string& dir) {
   mp.capm = o.boolean("capm", mp.capm);
   mp.footprint_points = static_cast<int>(o.integer("footprint_points", 1, KNIT_MS_MAX_POINTS, mp.footprint_points));
   mp.footprint_table = o.boolean("footprint_table", mp.footprint_table);
+  // (read either way, so that the key is still checked)
+  if (!class_tables) mp.footprint_table = false;
   mp.self_shadowing = o.boolean("self_shadowing", mp.self_shadowing);
   if (auto c = o.get("capm_options")) {
     JsonObject co(*c);

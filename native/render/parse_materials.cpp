@@ -4,7 +4,7 @@
 namespace knit::render {
 
 MaterialDesc parse_material(JsonNode node, const std::string& name, const std::string& dir,
-                            Warnings& warnings) {
+                            Warnings& warnings, bool class_tables) {
   JsonObject o(node);
   MaterialDesc m;
   m.name = name;
@@ -32,7 +32,7 @@ MaterialDesc parse_material(JsonNode node, const std::string& name, const std::s
                           fmt_num(sum.max()));
   } else {
     m.type = MaterialType::Knit;
-    m.knit = parse_knit_material(o, dir);
+    m.knit = parse_knit_material(o, dir, class_tables);
   }
   o.finish();
   return m;

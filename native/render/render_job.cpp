@@ -41,7 +41,7 @@ RenderJobResult run_render_job(const RenderJob& job, const std::function<void(co
   }
   if (!job.report_file.empty()) check_folder(job.report_file, "report");
 
-  SceneDesc desc = load_scene_file(job.scene_file);
+  SceneDesc desc = load_scene_file(job.scene_file, job.explicit_yarns && !job.knit_preview_diffuse);
   const double parse_seconds = since(t_start);
   Warnings warnings = desc.warnings;
   if (job.spp) desc.film.spp = *job.spp;

@@ -145,9 +145,13 @@ struct SceneDesc {
   }
 };
 
-// Reads and validates a scene file. Throws SceneError.
-SceneDesc load_scene_file(const std::string& path);
+// Reads and validates a scene file. Throws SceneError. explicit_yarns: the
+// scene will be rendered with explicit yarns (as `integrator.explicit_yarns`
+// in the file also says), so multi-scale knit materials need no class table
+// and do not build one.
+SceneDesc load_scene_file(const std::string& path, bool explicit_yarns = false);
 // Same, from text (`file` names it in messages, `dir` resolves relative paths).
-SceneDesc parse_scene(const std::string& text, const std::string& file, const std::string& dir);
+SceneDesc parse_scene(const std::string& text, const std::string& file, const std::string& dir,
+                      bool explicit_yarns = false);
 
 }  // namespace knit::render

@@ -126,7 +126,8 @@ static ObjectDesc parse_object(JsonNode node, size_t index, const std::string& d
   return d;
 }
 
-SceneDesc parse_scene(const std::string& text, const std::string& file, const std::string& dir) {
+SceneDesc parse_scene(const std::string& text, const std::string& file, const std::string& dir,
+                      bool explicit_yarns) {
   const nlohmann::json root = parse_json_strict(text, file);
   SceneDesc s;
   s.file = file;
@@ -140,7 +141,8 @@ SceneDesc parse_scene(const std::string& text, const std::string& file, const st
     JsonObject mats(*n);
     for (const std::string& name : mats.keys()) {
       if (name.empty()) n->fail("material names must not be empty");
-      s.materials.push_back(parse_material(mats.at(name), name, dir, s.warnings));
+      s.materials.push_back(
+          parse_material(mats.at(name), name, dir, s.warnings, !(explicit_yarns || s.integrator.explicit_yarns)));
     }
     mats.finish();
   }
@@ -165,7 +167,7 @@ SceneDesc parse_scene(const std::string& text, const std::string& file, const st
   return s;
 }
 
-SceneDesc load_scene_file(const std::string& path) {
+SceneDesc load_scene_file(const std::string& path, bool explicit_yarns) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw SceneError(path, "", "scene file not found");
   if (!fs::is_regular_file(path, ec)) throw SceneError(path, "", "not a regular file");
@@ -175,7 +177,7 @@ SceneDesc load_scene_file(const std::string& path) {
   ss << in.rdbuf();
   fs::path dir = fs::path(path).parent_path();
   if (dir.empty()) dir = ".";
-  return parse_scene(ss.str(), path, dir.string());
+  return parse_scene(ss.str(), path, dir.string(), explicit_yarns);
 }
 
 }  // namespace knit::render

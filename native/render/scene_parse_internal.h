@@ -19,8 +19,10 @@ constexpr double kMaxEmission = 1e9;
 std::string resolve_input_file(const JsonNode& node, const std::string& dir);
 
 LightDesc parse_light(JsonNode node, const std::string& dir);
+// class_tables: false when the knit model will not shade (explicit yarns):
+// multi-scale materials then skip building their class table.
 MaterialDesc parse_material(JsonNode node, const std::string& name, const std::string& dir,
-                            Warnings& warnings);
-KnitDesc parse_knit_material(JsonObject& obj, const std::string& dir);
+                            Warnings& warnings, bool class_tables = true);
+KnitDesc parse_knit_material(JsonObject& obj, const std::string& dir, bool class_tables = true);
 
 }  // namespace knit::render

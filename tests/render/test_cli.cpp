@@ -165,6 +165,33 @@ TEST(Cli, ReportsTheClassTableBuildApartFromParsing) {
   }
   EXPECT_LE(parts, s["total"].get<double>() + 1e-6);
   EXPECT_NE(r.out.find("knit class tables"), std::string::npos) << r.out;
+
+  // Rendered as explicit yarns (the option, or the scene's integrator), the
+  // model shades nothing: no class table is built, and the tubes' own
+  // set-up time joins the breakdown.
+  for (const std::string& how : {std::string("--explicit-yarns"), std::string("")}) {
+    std::string file = scene;
+    if (how.empty()) {
+      nlohmann::json j = nlohmann::json::parse(test::read_file(scene));
+      j["integrator"] = {{"explicit_yarns", true}};
+      file = test::write_file(dir, "explicit_scene.json", j.dump());
+    }
+    const CliRun e = run(dir, "render " + file + " -o " + dir + "/ex.exr " + how + " --report " + dir + "/ex.json");
+    ASSERT_EQ(e.code, 0) << e.err;
+    const nlohmann::json re = nlohmann::json::parse(test::read_file(dir + "/ex.json"));
+    EXPECT_EQ(re["knit"]["explicit_yarns"], true) << how;
+    EXPECT_EQ(re["seconds"]["knit_tables"], 0.0) << how;
+    EXPECT_GT(re["seconds"]["yarns"].get<double>(), 0.0) << how;
+    EXPECT_EQ(e.out.find("knit class tables"), std::string::npos) << e.out;
+    EXPECT_NE(e.out.find(", yarns "), std::string::npos) << e.out;
+  }
+  // The skipped table's key is still checked.
+  const std::string bad = test::write_file(
+      dir, "bad.json",
+      small_scene(R"({"type": "knit", "pattern": ["KP"], "uv_scale": 40, "mode": "multi_scale", "footprint_table": 3, "yarn_colors": [[1, 1, 1]]})"));
+  const CliRun b = run(dir, "render " + bad + " -o " + dir + "/bad.exr --explicit-yarns");
+  EXPECT_EQ(b.code, 1);
+  EXPECT_NE(b.err.find("footprint_table"), std::string::npos) << b.err;
 }
 
 TEST(Cli, CompareReportsLinearErrors) {
