@@ -27,6 +27,7 @@ Accel::Accel() {
   if (!device_) throw std::runtime_error("cannot create the Embree device");
   rtcSetDeviceErrorFunction(device_, &Accel::error_callback, this);
   rtcSetDeviceMemoryMonitorFunction(device_, &Accel::memory_monitor, this);
+  ray_masks_ = rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED) != 0;
   scene_ = rtcNewScene(device_);
   // Robust mode: no shortcuts that trade intersection accuracy for speed.
   rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
@@ -107,6 +108,41 @@ bool Accel::intersect(const RayDifferential& ray, SurfaceInteraction& si) const 
   si.light = rec.light;
   rec.shape->interaction(ray, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v, si);
   return true;
+}
+
+// Embree's ray masks: geometry that blocks shadow rays keeps the default
+// mask (all bits), pass-through geometry has kPassThroughMask only, and a
+// blocker-only ray carries kBlockerRayMask, which only the former has. Other
+// rays carry all bits and see everything.
+namespace {
+constexpr unsigned kPassThroughMask = 0x2u;
+constexpr unsigned kBlockerRayMask = 0x1u;
+}  // namespace
+
+void Accel::set_pass_through(unsigned id) {
+  records_[id].pass_through = true;
+  if (!ray_masks_) return;
+  RTCGeometry g = rtcGetGeometry(scene_, id);
+  rtcSetGeometryMask(g, kPassThroughMask);
+  rtcCommitGeometry(g);
+}
+
+bool Accel::has_blockers() const {
+  if (!ray_masks_) return false;
+  for (const GeometryRecord& r : records_)
+    if (r.shape && !r.pass_through) return true;
+  return false;
+}
+
+bool Accel::occluded_by_blockers(const Ray& ray) const {
+  if (!ray_masks_) return false;  // an Embree built without ray masks: no shortcut, never a wrong answer
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  RTCRay r;
+  to_rtc(ray, r);
+  r.mask = kBlockerRayMask;
+  rtcOccluded1(scene_, &ctx, &r);
+  return r.tfar < 0;
 }
 
 bool Accel::occluded(const Ray& ray) const {

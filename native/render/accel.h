@@ -22,6 +22,7 @@ struct GeometryRecord {
   std::unique_ptr<Shape> shape;
   int material = -1;  // index into Scene::materials (-1 for pure emitters)
   int light = -1;     // index into Scene::lights when the shape emits
+  bool pass_through = false;  // Accel::set_pass_through
 };
 
 class Accel {
@@ -40,6 +41,16 @@ class Accel {
   bool intersect(const RayDifferential& ray, SurfaceInteraction& si) const;
   // Any hit in (tmin, tmax).
   bool occluded(const Ray& ray) const;
+  // Marks geometry `id` as one that shadow rays may pass through (a material
+  // with pass-through events, Material::can_pass_through). Call before
+  // commit(). Unmarked geometry blocks them.
+  void set_pass_through(unsigned id);
+  // Any hit in (tmin, tmax) on geometry that blocks shadow rays outright:
+  // when there is one, the ray's transmittance is 0 whatever it crosses.
+  bool occluded_by_blockers(const Ray& ray) const;
+  // Whether any geometry blocks shadow rays outright (and ray masks work):
+  // without, occluded_by_blockers is always false and need not be asked.
+  bool has_blockers() const;
 
   const GeometryRecord& record(unsigned geom_id) const { return records_[geom_id]; }
   size_t num_geometries() const { return records_.size(); }
@@ -56,6 +67,7 @@ class Accel {
 
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
+  bool ray_masks_ = false;  // RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED
   std::vector<GeometryRecord> records_;
   std::atomic<int64_t> bytes_{0}, peak_{0};
   std::mutex error_mutex_;

@@ -117,6 +117,7 @@ RenderJobResult run_render_job(const RenderJob& job, const std::function<void(co
   rep.resolve_passes = r.stats.resolve_passes;
   rep.shadow_resolves = r.stats.shadow_resolves;
   rep.shell_bounces = r.stats.shell_bounces;
+  rep.marches_spared = r.stats.marches_spared;
   rep.table_resolves = r.stats.table_resolves;
   rep.triangles = scene.stats().triangles;
   rep.mesh_bytes = scene.stats().mesh_bytes;

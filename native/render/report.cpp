@@ -72,6 +72,13 @@ std::string RenderReport::to_text() const {
                   samples ? double(shadow_resolves) / double(samples) : 0.0,
                   samples ? double(shell_bounces) / double(samples) : 0.0);
     s += buf;
+    if (marches_spared > 0) {
+      std::snprintf(buf, sizeof buf,
+                    "  shadowing   %.2f light samples per sample from inside the yarn shell found an opaque object "
+                    "in the way (no march)\n",
+                    samples ? double(marches_spared) / double(samples) : 0.0);
+      s += buf;
+    }
     if (table_resolves > 0) {
       std::snprintf(buf, sizeof buf, "  multi-scale %.1f%% of the knit hits from the class table, %.1f%% marched\n",
                     100.0 * double(table_resolves) / double(resolves),
@@ -132,6 +139,7 @@ std::string RenderReport::to_json() const {
   j["knit"] = {{"materials", knit_materials}, {"explicit_yarns", explicit_yarns},
                {"hits", resolves}, {"hits_passed", resolve_passes}, {"shadow_crossings", shadow_resolves},
                {"shell_bounces", shell_bounces}, {"table_hits", table_resolves},
+               {"marches_spared", marches_spared},
                {"yarn_points", yarn_points}, {"yarn_segments", yarn_segments}, {"yarn_curves", yarn_curves},
                {"yarn_build_seconds", yarn_build_seconds}};
   return j.dump(2) + "\n";

@@ -56,6 +56,8 @@ class Scene {
   const Light* environment() const { return environment_; }
   int environment_index() const { return environment_index_; }
   bool has_pass_through() const { return has_pass_through_; }
+  // Some geometry blocks shadow rays outright (Accel::has_blockers).
+  bool has_shadow_blockers() const { return has_shadow_blockers_; }
   const PinholeCamera& camera() const { return camera_; }
   const SceneStats& stats() const { return stats_; }
   float radius() const { return radius_; }
@@ -72,6 +74,7 @@ class Scene {
   const Light* environment_ = nullptr;
   int environment_index_ = -1;
   bool has_pass_through_ = false;
+  bool has_shadow_blockers_ = false;
   PinholeCamera camera_;
   SceneStats stats_;
   float radius_ = 1;

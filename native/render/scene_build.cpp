@@ -91,7 +91,8 @@ Scene::Scene(const SceneDesc& desc, const BuildOptions& options, Warnings& warni
     }
     stats_.mesh_bytes += mesh->memory_bytes();
     object_materials_.push_back(material);
-    accel_->add(std::make_unique<TriangleShape>(mesh), material, -1);
+    const unsigned id = accel_->add(std::make_unique<TriangleShape>(mesh), material, -1);
+    if (material >= 0 && materials_[size_t(material)]->can_pass_through()) accel_->set_pass_through(id);
   }
   stats_.meshes_loaded = cache.size();
 
@@ -163,13 +164,15 @@ Scene::Scene(const SceneDesc& desc, const BuildOptions& options, Warnings& warni
       // (twice the vertices: the scaled copy Embree sees, CurveShape::attach)
       stats_.yarn_geometry_bytes += tubes->geometry_bytes() + tubes->vertices.size() * sizeof(float);
       stats_.yarn_shading_bytes += tubes->shading_bytes();
-      accel_->add(std::make_unique<CurveShape>(tubes), it->second, -1);
+      const unsigned id = accel_->add(std::make_unique<CurveShape>(tubes), it->second, -1);
+      if (materials_[size_t(it->second)]->can_pass_through()) accel_->set_pass_through(id);
       has_pass_through_ = true;
     }
     stats_.yarn_build_seconds = seconds_since(t_yarns);
     commit();
   }
   stats_.triangles = accel_->num_primitives() - stats_.yarn_segments;
+  has_shadow_blockers_ = accel_->has_blockers();
 
   Vec3 lo, hi;
   accel_->bounds(lo, hi);

@@ -18,6 +18,7 @@
 #include "render/image_compare.h"
 #include "render/material_knit.h"
 #include "render/mesh_frame.h"
+#include "render/triangle_shape.h"
 #include "render/yarn_tubes.h"
 #include "render_test_util.h"
 
@@ -394,7 +395,14 @@ TEST(KnitFurnace, ExplicitYarns) {
 // BSDF sampling only and MIS must agree. (1024 samples: BSDF sampling alone
 // finds the small light rarely, and at 256 the image mean of one seed
 // still moves by 1-2% between seeds.)
-std::string strategies_scene(const std::string& strategy, const std::string& mode) {
+std::string strategies_scene(const std::string& strategy, const std::string& mode, bool occluder = false) {
+  // occluder: an opaque board between the fabric and part of the light, so
+  // that light samples from inside the yarn shell meet it (PathStats::
+  // marches_spared) and NEE must still agree with BSDF sampling.
+  const std::string board =
+      occluder ? R"(, {"mesh": ")" + mesh("quad.obj") + R"(", "material": "floor",
+                  "transform": {"translate": [0.3, 0.9, 0], "rotate": [90, 0, 0], "scale": 0.6}})"
+               : std::string();
   return R"({
     "film": {"width": 16, "height": 16, "spp": 1024, "seed": 11},
     "camera": {"position": [0, 1.6, 0.9], "look_at": [0, 0, 0], "fov": 30},
@@ -406,16 +414,16 @@ std::string strategies_scene(const std::string& strategy, const std::string& mod
                            "yarn_colors": [[0.8, 0.5, 0.3]], "mode": ")" + mode + R"(", "footprint_points": 4}},
     "objects": [{"mesh": ")" + mesh("quad.obj") + R"(", "material": "floor", "transform": {"rotate": [-90, 0, 0], "scale": 3}},
                 {"mesh": ")" + mesh("quad.obj") + R"(", "material": "wool",
-                 "transform": {"translate": [0, 0.5, 0], "rotate": [-90, 0, 0], "scale": 1.2}}]
+                 "transform": {"translate": [0, 0.5, 0], "rotate": [-90, 0, 0], "scale": 1.2}})" + board + R"(]
   })";
 }
 
-void expect_strategies_agree(const std::string& mode) {
+void expect_strategies_agree(const std::string& mode, bool occluder = false) {
   const std::string dir = test::test_dir();
   double mean[3], err[3];
   const char* names[3] = {"mis", "nee", "bsdf"};
   for (int s = 0; s < 3; ++s) {
-    const auto r = test::render_text(dir, strategies_scene(names[s], mode));
+    const auto r = test::render_text(dir, strategies_scene(names[s], mode, occluder));
     EXPECT_EQ(r.result.stats.invalid_samples, 0u);
     // Standard error of the image mean from the spread of 4x4-pixel block means.
     const RgbImage b = block_average(r.image, 4);
@@ -429,10 +437,13 @@ void expect_strategies_agree(const std::string& mode) {
     mean[s] = m;
     err[s] = std::sqrt(std::max(m2 / n - m * m, 0.0) / n);
     if (s == 0) EXPECT_GT(r.result.stats.shadow_resolves, 0u);
+    if (occluder && s < 2) EXPECT_GT(r.result.stats.marches_spared, 1000u) << names[s];  // the board was met
+    if (s == 2) EXPECT_EQ(r.result.stats.marches_spared, 0u);                            // no light samples
   }
   for (int s = 1; s < 3; ++s) {
     const double z = (mean[s] - mean[0]) / std::sqrt(err[0] * err[0] + err[s] * err[s]);
-    std::printf("[strategies] %s: mis %.5f, %s %.5f (z = %.2f)\n", mode.c_str(), mean[0], names[s], mean[s], z);
+    std::printf("[strategies] %s%s: mis %.5f, %s %.5f (z = %.2f)\n", mode.c_str(), occluder ? " under a board" : "",
+                mean[0], names[s], mean[s], z);
     EXPECT_LT(std::fabs(z), 4.0) << names[s];
     EXPECT_NEAR(mean[s] / mean[0], 1.0, 0.03) << names[s];
   }
@@ -440,6 +451,42 @@ void expect_strategies_agree(const std::string& mode) {
 
 TEST(KnitStrategies, NearFieldAgree) { expect_strategies_agree("near_field"); }
 TEST(KnitStrategies, MultiScaleAgree) { expect_strategies_agree("multi_scale"); }
+// Light samples from inside the shell first ask whether an opaque object
+// blocks the light (Accel::occluded_by_blockers) and skip the march if so: a
+// wrong answer there would make NEE darker than BSDF sampling.
+TEST(KnitStrategies, NearFieldAgreeUnderAnOpaqueBoard) { expect_strategies_agree("near_field", true); }
+
+// Blocker-only rays see geometry that shadow rays cannot pass and nothing else.
+TEST(Accel, BlockerOnlyRaysIgnorePassThroughGeometry) {
+  auto quad_at = [](float z) {
+    auto m = std::make_shared<TriangleMesh>();
+    m->positions = {{-1, -1, z}, {1, -1, z}, {1, 1, z}, {-1, 1, z}};
+    m->normals = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}, {0, 0, 1}};
+    m->indices = {0, 1, 2, 0, 2, 3};
+    return m;
+  };
+  Accel accel;
+  const unsigned glass = accel.add(std::make_unique<TriangleShape>(quad_at(1)), 0, -1);
+  accel.set_pass_through(glass);
+  accel.add(std::make_unique<TriangleShape>(quad_at(3)), 1, -1);  // opaque
+  accel.commit();
+  Ray through_both;  // from z = 0 upwards: meets the pass-through quad, then the opaque one
+  through_both.o = {0, 0, 0};
+  through_both.d = {0, 0, 1};
+  Ray only_glass = through_both;
+  only_glass.tmax = 2;
+  EXPECT_TRUE(accel.occluded(only_glass));
+  EXPECT_FALSE(accel.occluded_by_blockers(only_glass));
+  EXPECT_TRUE(accel.occluded_by_blockers(through_both));
+  // Ordinary rays still meet the pass-through quad first.
+  RayDifferential probe;
+  probe.o = through_both.o;
+  probe.d = through_both.d;
+  SurfaceInteraction si;
+  ASSERT_TRUE(accel.intersect(probe, si));
+  EXPECT_EQ(si.material, 0);
+  EXPECT_NEAR(si.t, 1.0f, 1e-5f);
+}
 
 TEST(KnitDeterminism, SameSeedSameImageWithOneAndTwoThreads) {
   const std::string dir = test::test_dir();
