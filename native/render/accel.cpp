@@ -117,6 +117,17 @@ bool Accel::intersect(const RayDifferential& ray, SurfaceInteraction& si) const 
 namespace {
 constexpr unsigned kPassThroughMask = 0x2u;
 constexpr unsigned kBlockerRayMask = 0x1u;
+
+// Any hit in (tmin, tmax) on geometry whose mask shares a bit with `mask`.
+bool occluded_with_mask(RTCScene scene, const Ray& ray, unsigned mask) {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  RTCRay r;
+  to_rtc(ray, r);
+  r.mask = mask;
+  rtcOccluded1(scene, &ctx, &r);
+  return r.tfar < 0;  // Embree sets tfar to -inf on a hit
+}
 }  // namespace
 
 void Accel::set_pass_through(unsigned id) {
@@ -136,22 +147,9 @@ bool Accel::has_blockers() const {
 
 bool Accel::occluded_by_blockers(const Ray& ray) const {
   if (!ray_masks_) return false;  // an Embree built without ray masks: no shortcut, never a wrong answer
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  RTCRay r;
-  to_rtc(ray, r);
-  r.mask = kBlockerRayMask;
-  rtcOccluded1(scene_, &ctx, &r);
-  return r.tfar < 0;
+  return occluded_with_mask(scene_, ray, kBlockerRayMask);
 }
 
-bool Accel::occluded(const Ray& ray) const {
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  RTCRay r;
-  to_rtc(ray, r);
-  rtcOccluded1(scene_, &ctx, &r);
-  return r.tfar < 0;  // Embree sets tfar to -inf on a hit
-}
+bool Accel::occluded(const Ray& ray) const { return occluded_with_mask(scene_, ray, 0xffffffffu); }
 
 }  // namespace knit::render
