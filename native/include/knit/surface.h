@@ -102,6 +102,15 @@ class KnitSurface {
   std::vector<TubeCrossing> crossings(float x, float y) const;
   // The first tube surface seen from above at (x, y) (paper's height query).
   SurfaceHit query(float x, float y) const;
+  // query() at n points (x[i], y[i]) into out[i]. Auto: 16 points at a time
+  // with AVX-512 where the CPU has it and the pattern has knit and purl
+  // stitches only, the scalar kernel otherwise (src/query_batch.cpp); the
+  // two agree up to float rounding. Simd: that path or std::invalid_argument.
+  enum class BatchPath { Auto, Scalar, Simd };
+  void query_batch(const float* x, const float* y, size_t n, SurfaceHit* out,
+                   BatchPath path = BatchPath::Auto) const;
+  static bool batch_simd_available();        // this CPU and build have the SIMD path
+  bool batch_uses_simd(BatchPath path) const;  // which path query_batch takes (throws as it would)
   // CAPM (paper Alg. 1, Sec. 4.2/6.1): the ray enters the shell at
   // (x, y, shell_top()) travelling along -wi_local (wi_local.z > 0, pointing
   // to the viewer, in the frame at (x, y)); `frame` bends it (flat if null).

@@ -1,0 +1,752 @@
+// KnitSurface::query_batch: vertical queries at many points, 16 at a time
+// with AVX-512 where the CPU has it.
+//
+// The vertical query of query.h (knit_vertical_query) taken apart into
+// stages, each run over 16 lanes at once:
+//   1. candidates: for every point, the (row, piece) pairs whose piece box
+//      comes within r of the vertical line and whose quadratic interpolant's
+//      chord bound does not rule it out (knit_line_query's culls, in the
+//      same order). Lanes that pass are compressed into a list, so the
+//      costly stages below run on full vectors of live work.
+//   2. closest points: the cubic of the piece's interpolant (Cardano or
+//      Viete, as cubic.h), then one Newton step on the exact curve.
+//   3. entries: the safeguarded Newton search of knit_newton_extreme for the
+//      entry (the maximum of z(t) + sqrt(r^2 - rho(t)^2)) on the exact curve,
+//      depth signs and blends included.
+//   4. per point, in row and piece order: the kernel's de-duplication of a
+//      crossing found from two pieces, the layer count and the first entry.
+// A vertical line's distance to a knit or purl yarn lies in x and y, which
+// do not depend on the codes (stitch.h), so stages 1-2 never read the
+// pattern; stage 3 reads the depth signs of the three cells around the
+// piece once per candidate.
+//
+// The same mathematics as the scalar kernel, evaluated in a different
+// order and with fused multiply-adds: results agree with query() up to float
+// rounding, not bit for bit (tests/native/test_query_batch.cpp bounds the
+// difference, and checks both against the double-precision tube ray casts).
+// Patterns with slip stitches (codes 2, 3), machines without AVX-512 and
+// non-x86 builds take the scalar kernel, point by point.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <vector>
+
+#include "knit/surface.h"
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#define KNIT_HAVE_AVX512_PATH 1
+#include <immintrin.h>
+#else
+#define KNIT_HAVE_AVX512_PATH 0
+#endif
+
+namespace knit {
+
+namespace {
+
+SurfaceHit hit_from(const k::KnitLineHit& h) {
+  SurfaceHit s;
+  s.hit = h.hit != 0;
+  if (s.hit) {
+    s.position = h.p;
+    s.normal = h.n;
+    s.tangent = h.tangent;
+    s.row = h.row;
+    s.col = h.col;
+    s.stitch = h.code;
+    s.color = h.colour;
+  }
+  s.layers = h.crossings;
+  return s;
+}
+
+void query_scalar(const KnitSurface& s, const float* x, const float* y, size_t n, SurfaceHit* out) {
+  for (size_t i = 0; i < n; ++i)
+    out[i] = hit_from(k::knit_vertical_query(s.geom(), s.codes(), s.colors(), x[i], y[i]));
+}
+
+#if KNIT_HAVE_AVX512_PATH
+
+bool cpu_has_avx512() {
+  static const bool ok = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq");
+  return ok;
+}
+
+#pragma GCC push_options
+#pragma GCC target("avx512f,avx512dq,fma,avx2,bmi,bmi2")
+// GCC 12 reports the deliberately undefined first operand of its own
+// AVX-512 intrinsics (_mm512_undefined_ps) as uninitialised once inlined.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+
+// 16 floats, 16 ints and a lane mask, with the operators the stages need.
+struct F {
+  __m512 v;
+};
+struct I {
+  __m512i v;
+};
+using M = __mmask16;
+
+inline F fv(float a) { return {_mm512_set1_ps(a)}; }
+inline I iv(int a) { return {_mm512_set1_epi32(a)}; }
+inline F operator+(F a, F b) { return {_mm512_add_ps(a.v, b.v)}; }
+inline F operator-(F a, F b) { return {_mm512_sub_ps(a.v, b.v)}; }
+inline F operator*(F a, F b) { return {_mm512_mul_ps(a.v, b.v)}; }
+inline F operator/(F a, F b) { return {_mm512_div_ps(a.v, b.v)}; }
+inline F operator-(F a) { return {_mm512_xor_ps(a.v, _mm512_set1_ps(-0.0f))}; }
+inline I operator+(I a, I b) { return {_mm512_add_epi32(a.v, b.v)}; }
+inline I operator-(I a, I b) { return {_mm512_sub_epi32(a.v, b.v)}; }
+inline I operator*(I a, I b) { return {_mm512_mullo_epi32(a.v, b.v)}; }
+inline I operator&(I a, I b) { return {_mm512_and_si512(a.v, b.v)}; }
+inline M lt(F a, F b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_LT_OQ); }
+inline M le(F a, F b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_LE_OQ); }
+inline M gt(F a, F b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_GT_OQ); }
+inline M ge(F a, F b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_GE_OQ); }
+inline M eq(F a, F b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_EQ_OQ); }
+inline M ne(F a, F b) { return _mm512_cmp_ps_mask(a.v, b.v, _CMP_NEQ_UQ); }
+inline M ilt(I a, I b) { return _mm512_cmplt_epi32_mask(a.v, b.v); }
+inline M igt(I a, I b) { return _mm512_cmpgt_epi32_mask(a.v, b.v); }
+inline M ieq(I a, I b) { return _mm512_cmpeq_epi32_mask(a.v, b.v); }
+inline M ile(I a, I b) { return _mm512_cmple_epi32_mask(a.v, b.v); }
+// m ? a : b, lane by lane
+inline F sel(M m, F a, F b) { return {_mm512_mask_blend_ps(m, b.v, a.v)}; }
+inline I sel(M m, I a, I b) { return {_mm512_mask_blend_epi32(m, b.v, a.v)}; }
+inline F vmin(F a, F b) { return {_mm512_min_ps(a.v, b.v)}; }
+inline F vmax(F a, F b) { return {_mm512_max_ps(a.v, b.v)}; }
+inline F clampv(F x, F lo, F hi) { return vmin(vmax(x, lo), hi); }
+inline F vabs(F a) { return {_mm512_abs_ps(a.v)}; }
+inline F vsqrt(F a) { return {_mm512_sqrt_ps(a.v)}; }
+inline F vfloor(F a) { return {_mm512_roundscale_ps(a.v, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC)}; }
+inline F vceil(F a) { return {_mm512_roundscale_ps(a.v, _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC)}; }
+inline F tof(I a) { return {_mm512_cvtepi32_ps(a.v)}; }
+inline I toi_trunc(F a) { return {_mm512_cvttps_epi32(a.v)}; }
+inline F fma(F a, F b, F c) { return {_mm512_fmadd_ps(a.v, b.v, c.v)}; }
+inline F sgn1(F a) { return sel(lt(a, fv(0.0f)), fv(-1.0f), fv(1.0f)); }  // k_signf
+// table[j] for j in 0..15 (a 16-entry table held in a register)
+inline F lookup(const F& table, I j) { return {_mm512_permutexvar_ps(j.v, table.v)}; }
+inline F gather(const float* base, I idx, M m) {
+  return {_mm512_mask_i32gather_ps(_mm512_setzero_ps(), m, idx.v, base, 4)};
+}
+inline I gather(const int32_t* base, I idx, M m) {
+  return {_mm512_mask_i32gather_epi32(_mm512_setzero_si512(), m, idx.v, base, 4)};
+}
+inline F load(const float* p) { return {_mm512_loadu_ps(p)}; }
+inline I load(const int32_t* p) { return {_mm512_loadu_si512(p)}; }
+inline void store(float* p, F a) { _mm512_storeu_ps(p, a.v); }
+inline void store(int32_t* p, I a) { _mm512_storeu_si512(p, a.v); }
+// The lanes of a selected by m, packed to the front, stored at p (16 ints
+// are written: p needs 16 of room). A compress in a register and a plain
+// store: the compress-to-memory instruction is microcoded and slow on some
+// CPUs (AMD Zen 4 among them).
+inline void compress_store(int32_t* p, M m, I a) { _mm512_storeu_si512(p, _mm512_maskz_compress_epi32(m, a.v)); }
+// Floor-modulo (k_modi) for |a| < 2^23 and 0 < n < 2^23 (exact: the float
+// quotient is corrected by one either way).
+inline I modi(I a, int n) {
+  const F fa = tof(a), fn = fv(float(n));
+  I q = toi_trunc(vfloor(fa / fn));
+  I r = a - q * iv(n);
+  r = sel(ilt(r, iv(0)), r + iv(n), r);
+  r = sel(igt(r, iv(n - 1)), r - iv(n), r);
+  return r;
+}
+inline I ifloor(F a) { return toi_trunc(vfloor(a)); }
+
+// knit_sincos, lane by lane (the same reduction and polynomials).
+inline void sincos_v(F x, F& s_out, F& c_out) {
+  const F qf = tof(toi_trunc(x * fv(0.63661977236758134308f) + sel(ge(x, fv(0.0f)), fv(0.5f), fv(-0.5f))));
+  const F y = ((x - qf * fv(1.5703125f)) - qf * fv(4.837512969970703125e-4f)) - qf * fv(7.549789954891882e-8f);
+  const F y2 = y * y;
+  const F s = y + y * y2 *
+                      (fv(-1.0f / 6.0f) +
+                       y2 * (fv(1.0f / 120.0f) + y2 * (fv(-1.0f / 5040.0f) + y2 * fv(1.0f / 362880.0f))));
+  const F c =
+      fv(1.0f) +
+      y2 * (fv(-0.5f) +
+            y2 * (fv(1.0f / 24.0f) +
+                  y2 * (fv(-1.0f / 720.0f) + y2 * (fv(1.0f / 40320.0f) + y2 * fv(-1.0f / 3628800.0f)))));
+  const I n = toi_trunc(qf) & iv(3);
+  const M q1 = ieq(n, iv(1)), q2 = ieq(n, iv(2)), q3 = ieq(n, iv(3));
+  s_out = sel(q1, c, sel(q2, -s, sel(q3, -c, s)));
+  c_out = sel(q1, -s, sel(q2, -c, sel(q3, s, c)));
+}
+
+// acos on [-1, 1]: sqrt(1 - |x|) times a degree-7 polynomial in |x|
+// (Abramowitz and Stegun 4.4.46, |error| <= 2e-8), reflected for x < 0.
+inline F acos_v(F x) {
+  const F ax = vabs(x);
+  const F p =
+      fv(1.5707963050f) +
+      ax * (fv(-0.2145988016f) +
+            ax * (fv(0.0889789874f) +
+                  ax * (fv(-0.0501743046f) +
+                        ax * (fv(0.0308918810f) +
+                              ax * (fv(-0.0170881256f) + ax * (fv(0.0066700901f) + ax * fv(-0.0012624911f)))))));
+  const F r = vsqrt(vmax(fv(1.0f) - ax, fv(0.0f))) * p;
+  return sel(lt(x, fv(0.0f)), fv(3.14159265358979f) - r, r);
+}
+
+// Cube root: a first guess from the bits and three Newton steps
+// (knit_host_cbrt's method); 0 stays 0.
+inline F cbrt_v(F x) {
+  const F ax = vabs(x);
+  const M pos = gt(ax, fv(1.0e-30f));
+  const F axs = sel(pos, ax, fv(1.0f));
+  const __m512i bits = _mm512_castps_si512(axs.v);
+  // i / 3 + 709921077 through double-width floats (exact enough for a guess)
+  const __m512i third = _mm512_cvttps_epi32(_mm512_mul_ps(_mm512_cvtepu32_ps(bits), _mm512_set1_ps(1.0f / 3.0f)));
+  F y = {_mm512_castsi512_ps(_mm512_add_epi32(third, _mm512_set1_epi32(709921077)))};
+  for (int it = 0; it < 3; ++it) y = y - (y * y * y - axs) / (fv(3.0f) * y * y);
+  y = sel(pos, y, fv(0.0f));
+  return sel(lt(x, fv(0.0f)), -y, y);
+}
+
+inline F cubic_newton_v(F a3, F a2, F a1, F a0, F x) {
+  const F f = ((a3 * x + a2) * x + a1) * x + a0;
+  const F df = (fv(3.0f) * a3 * x + fv(2.0f) * a2) * x + a1;
+  const F nx = x - f / df;
+  const M ok = ne(df, fv(0.0f)) & _mm512_cmp_ps_mask(nx.v, nx.v, _CMP_ORD_Q) & lt(vabs(nx), fv(1.0e30f));
+  return sel(ok, nx, x);
+}
+
+// Real roots of a3 x^3 + a2 x^2 + a1 x + a0 (solve_cubic and
+// solve_quadratic, every branch evaluated and the lane's one kept): roots
+// r0..r2 with n of them valid, in ascending order.
+inline void solve_cubic_v(F a3, F a2, F a1, F a0, F& r0, F& r1, F& r2, I& nroots) {
+  const F big = fv(1.0e30f);
+  const F scale = vmax(vmax(vabs(a2), vabs(a1)), vabs(a0));
+  const M quad = le(vabs(a3), fv(1.0e-6f) * scale) | eq(a3, fv(0.0f));
+  // cubic branch
+  const F a3s = sel(quad, fv(1.0f), a3);
+  const F b = a2 / a3s, c = a1 / a3s, d = a0 / a3s;
+  const F b3 = b / fv(3.0f);
+  const F p = c - b * b3;
+  const F q = fv(2.0f) * b3 * b3 * b3 - b3 * c + d;
+  const F hq = fv(0.5f) * q;
+  const F tp = p / fv(3.0f);
+  const F disc = hq * hq + tp * tp * tp;
+  const M one = gt(disc, fv(0.0f));
+  const M triple = ~one & eq(tp, fv(0.0f));
+  F A = -sgn1(q) * cbrt_v(vabs(hq) + vsqrt(vmax(disc, fv(0.0f))));
+  const F Bc = sel(ne(A, fv(0.0f)), -tp / sel(ne(A, fv(0.0f)), A, fv(1.0f)), fv(0.0f));
+  const F root1 = A + Bc - b3;
+  const F mm = fv(2.0f) * vsqrt(vmax(-tp, fv(0.0f)));
+  const F den = p * mm;
+  const F phi = acos_v(clampv(fv(3.0f) * q / sel(ne(den, fv(0.0f)), den, fv(1.0f)), fv(-1.0f), fv(1.0f))) / fv(3.0f);
+  F sp, cp;
+  sincos_v(phi, sp, cp);
+  const F hc = fv(-0.5f) * cp, hs = fv(0.86602540378443864676f) * sp;
+  F c0 = sel(one, root1, sel(triple, -b3, mm * cp - b3));
+  F c1 = mm * (hc + hs) - b3;
+  F c2 = mm * (hc - hs) - b3;
+  const M three = ~one & ~triple;
+  c0 = cubic_newton_v(a3s, a2, a1, a0, c0);
+  c1 = cubic_newton_v(a3s, a2, a1, a0, c1);
+  c2 = cubic_newton_v(a3s, a2, a1, a0, c2);
+  // quadratic branch: a2 x^2 + a1 x + a0
+  const F qscale = scale;
+  const M qnone = eq(qscale, fv(0.0f));
+  const M lin = le(vabs(a2), fv(1.0e-7f) * qscale);
+  const F qdisc = a1 * a1 - fv(4.0f) * a2 * a0;
+  const F qq = fv(-0.5f) * (a1 + sgn1(a1) * vsqrt(vmax(qdisc, fv(0.0f))));
+  const M qzero = eq(qq, fv(0.0f));
+  const F qr0 = qq / sel(lin, fv(1.0f), a2);
+  const F qr1 = a0 / sel(qzero, fv(1.0f), qq);
+  const F lr = -a0 / sel(eq(a1, fv(0.0f)), fv(1.0f), a1);
+  I nq = sel(qnone, iv(0),
+             sel(lin, sel(eq(a1, fv(0.0f)), iv(0), iv(1)),
+                 sel(lt(qdisc, fv(0.0f)), iv(0), sel(qzero, iv(1), iv(2)))));
+  F q0 = sel(lin, lr, sel(qzero, fv(0.0f), vmin(qr0, qr1)));
+  F q1 = vmax(qr0, qr1);
+  // cubic roots sorted (three) or the one
+  const F s0 = vmin(vmin(c0, c1), c2), s2 = vmax(vmax(c0, c1), c2);
+  const F s1 = vmax(vmin(c0, c1), vmin(vmax(c0, c1), c2));
+  r0 = sel(quad, q0, sel(three, s0, c0));
+  r1 = sel(quad, q1, sel(three, s1, big));
+  r2 = sel(quad, big, sel(three, s2, big));
+  nroots = sel(quad, nq, sel(three, iv(3), iv(1)));
+}
+
+// Per-surface constants of the batched query (pattern-independent: the
+// x and y of knit and purl yarns), per piece place j = 0..7 in its cell.
+struct BatchConsts {
+  F oxl, oxh, oyl, oyh;     // knit_piece_offsets_xy
+  F q0x, q0y, q1x, q1y, q2x, q2y;  // interpolant relative to (t0, y_k)
+};
+
+BatchConsts make_consts(const k::KnitGeom& g) {
+  alignas(64) float oxl[16] = {}, oxh[16] = {}, oyl[16] = {}, oyh[16] = {};
+  alignas(64) float q0x[16] = {}, q0y[16] = {}, q1x[16] = {}, q1y[16] = {}, q2x[16] = {}, q2y[16] = {};
+  for (int j = 0; j < 8; ++j) {
+    const k::KBox o = k::knit_piece_offsets_xy(g, j);
+    oxl[j] = o.lo.x;
+    oxh[j] = o.hi.x;
+    oyl[j] = o.lo.y;
+    oyh[j] = o.hi.y;
+    // nodes m = 2j, 2j+1, 2j+2 at tau = m pi/8 - pi, relative to the piece's
+    // start t0 = tc + (j pi/4 - pi) in x and to y_k in y, in double
+    double nx[3], ny[3];
+    for (int i = 0; i < 3; ++i) {
+      const int m = 2 * j + i;
+      const double tau = m * (M_PI / 8) - M_PI;
+      nx[i] = (tau - (j * (M_PI / 4) - M_PI)) + double(g.a) * std::sin(2 * tau);
+      ny[i] = double(g.h) * std::cos(tau);
+    }
+    q0x[j] = float(nx[0]);
+    q0y[j] = float(ny[0]);
+    q1x[j] = float(4 * nx[1] - 3 * nx[0] - nx[2]);
+    q1y[j] = float(4 * ny[1] - 3 * ny[0] - ny[2]);
+    q2x[j] = float(2 * (nx[0] - 2 * nx[1] + nx[2]));
+    q2y[j] = float(2 * (ny[0] - 2 * ny[1] + ny[2]));
+  }
+  return {load(oxl), load(oxh), load(oyl), load(oyh), load(q0x), load(q0y),
+          load(q1x), load(q1y), load(q2x), load(q2y)};
+}
+
+// The curve of a row at t with its depth: x relative to the point (qx),
+// y relative to the point (qy), z, and the derivatives. sgA, sgB, sgL: the
+// depth polynomial's A, B and -sl (knit_depth_poly) of the lane's cell and
+// of its blend neighbour.
+struct CurveV {
+  F qx, qy, z;
+  F d1x, d1y, z1;
+  F d2x, d2y, z2;
+};
+
+// Depth polynomial coefficients of a cell from its head, legs and sinker
+// signs packed as bits (1: purl sign): A, B, sl.
+inline void depth_coeffs(I bits, F& A, F& B, F& sl) {
+  const M bh = _mm512_test_epi32_mask(bits.v, _mm512_set1_epi32(1));
+  const M bl = _mm512_test_epi32_mask(bits.v, _mm512_set1_epi32(2));
+  const M bs = _mm512_test_epi32_mask(bits.v, _mm512_set1_epi32(4));
+  const F sh = sel(bh, fv(-1.0f), fv(1.0f));
+  sl = sel(bl, fv(-1.0f), fv(1.0f));
+  const F ss = sel(bs, fv(-1.0f), fv(1.0f));
+  A = fv(0.5f) * (sh + ss) + sl;
+  B = fv(0.5f) * (sh - ss);
+}
+
+struct Work {
+  // stage 1 output: candidates in (point, row, piece) order per point
+  std::vector<int32_t> pt, row, piece;
+  // stage 2/3 per candidate
+  std::vector<float> t, s_in, px, py, pz, nx, ny, nz, tx, ty, tz;
+  std::vector<int32_t> hit, col;
+  std::vector<int32_t> live;  // candidates with a closest point within m
+};
+
+
+// Depth-sign bits of the cell at pattern-row offsets (off, up, dn) and
+// column index ci (all lanes' cells are knit or purl): bit 0 head (the cell
+// above), bit 1 legs (the cell itself), bit 2 sinker (the cell below); set
+// for a purl sign.
+inline I cell_bits(const int32_t* codes, I off, I up, I dn, I ci, M m) {
+  const I one = iv(1);
+  const I ch = gather(codes, up + ci, m), cl = gather(codes, off + ci, m), cs = gather(codes, dn + ci, m);
+  return sel(ieq(ch, one), iv(1), iv(0)) + sel(ieq(cl, one), iv(2), iv(0)) + sel(ieq(cs, one), iv(4), iv(0));
+}
+
+// Row offsets into codes[] of rows k, k + 1, k - 1 (knit_row).
+inline void row_offsets(const k::KnitGeom& g, I k, I& off, I& up, I& dn) {
+  const I rm1 = iv(g.rows - 1), cols = iv(g.cols);
+  off = (rm1 - modi(k, g.rows)) * cols;
+  up = (rm1 - modi(k + iv(1), g.rows)) * cols;
+  dn = (rm1 - modi(k - iv(1), g.rows)) * cols;
+}
+
+// A chunk of candidates in stage 3: each lane's row, span (the cells
+// around the piece's column cs) and point.
+struct SpanV {
+  I cs, off, up, dn;
+  I bl, bm, br;  // depth bits of columns cs - 1, cs, cs + 1
+  F yk, X, Y;
+};
+
+// Depth bits of column c for each lane: from the span when c is within a
+// column of cs, looked up otherwise (rare: a search that left the span).
+inline I bits_of(const k::KnitGeom& g, const int32_t* codes, const SpanV& sp, I c, M m) {
+  const I d = c - sp.cs;
+  I b = sel(ilt(d, iv(0)), sp.bl, sel(igt(d, iv(0)), sp.br, sp.bm));
+  const M far = m & (ilt(d, iv(-1)) | igt(d, iv(1)));
+  if (far) b = sel(far, cell_bits(codes, sp.off, sp.up, sp.dn, modi(c, g.cols), far), b);
+  return b;
+}
+
+// The exact curve of each lane's row at t, relative to its point in x and
+// y (knit_span_curve_at for knit and purl cells: the profile of t's column,
+// blended with its neighbour's near their boundary; x and y do not depend
+// on the cells, so the neighbour's profile shares sin and cos).
+inline CurveV curve_at(const k::KnitGeom& g, const int32_t* codes, const SpanV& sp, F t, M m) {
+  const F two_pi = fv(6.28318530717958647692f), pi = fv(3.14159265358979323846f), pi4 = fv(0.78539816339744830962f);
+  const I c = ifloor(t / two_pi);
+  const F tc = two_pi * tof(c) + pi;
+  const F tau = t - tc;
+  const I side = sel(gt(tau, pi - pi4), iv(1), sel(lt(tau, pi4 - pi), iv(-1), iv(0)));
+  const I nc = c + side;
+  const I bself = bits_of(g, codes, sp, c, m);
+  const I bnb = bits_of(g, codes, sp, nc, m & ~ieq(side, iv(0)));
+  F s1, c1;
+  sincos_v(tau, s1, c1);
+  const F s2 = fv(2.0f) * s1 * c1, c2 = c1 * c1 - s1 * s1;
+  const F a = fv(g.a), h = fv(g.h), d = fv(g.d);
+  CurveV cv;
+  cv.qx = ((tc + tau) + a * s2) - sp.X;
+  cv.qy = (sp.yk + h * c1) - sp.Y;
+  cv.d1x = fv(1.0f) + fv(2.0f) * a * c2;
+  cv.d1y = -h * s1;
+  cv.d2x = fv(-4.0f) * a * s2;
+  cv.d2y = -h * c1;
+  F A, B, sl, An, Bn, sln;
+  depth_coeffs(bself, A, B, sl);
+  depth_coeffs(sel(ieq(side, iv(0)), bself, bnb), An, Bn, sln);
+  const F c1s = c1 * c1;
+  const F P = (A + B * c1) * c1s - sl, P1 = (fv(2.0f) * A + fv(3.0f) * B * c1) * c1,
+          P2 = fv(2.0f) * A + fv(6.0f) * B * c1;
+  const F Pn = (An + Bn * c1) * c1s - sln, P1n = (fv(2.0f) * An + fv(3.0f) * Bn * c1) * c1,
+          P2n = fv(2.0f) * An + fv(6.0f) * Bn * c1;
+  const F zs = d * P, z1s = -d * P1 * s1, z2s = d * (P2 * s1 * s1 - P1 * c1);
+  const F zn = d * Pn, z1n = -d * P1n * s1, z2n = d * (P2n * s1 * s1 - P1n * c1);
+  const M self_lo = igt(nc, c);  // the neighbour is on the right: self is left of the boundary
+  const F zlo = sel(self_lo, zs, zn), z1lo = sel(self_lo, z1s, z1n), z2lo = sel(self_lo, z2s, z2n);
+  const F e0 = sel(self_lo, zn, zs) - zlo, e1 = sel(self_lo, z1n, z1s) - z1lo, e2 = sel(self_lo, z2n, z2s) - z2lo;
+  const F tb = two_pi * tof(sel(igt(nc, c), nc, c));
+  const F w2 = fv(1.57079632679489661923f);
+  const F xw = clampv((t - (tb - pi4)) / w2, fv(0.0f), fv(1.0f));
+  const F xw2 = xw * xw;
+  const F w = xw2 * xw * (fv(10.0f) + xw * (fv(-15.0f) + fv(6.0f) * xw));
+  const F dw = fv(30.0f) * xw2 * (xw - fv(1.0f)) * (xw - fv(1.0f)) / w2;
+  const F ddw = fv(60.0f) * xw * (xw - fv(1.0f)) * (fv(2.0f) * xw - fv(1.0f)) / (w2 * w2);
+  cv.z = zlo + e0 * w;
+  cv.z1 = (z1lo + e1 * w) + e0 * dw;
+  cv.z2 = ((z2lo + e2 * w) + e1 * (fv(2.0f) * dw)) + e0 * ddw;
+  return cv;
+}
+
+// x and y only of the curve at t (stage 2's Newton step on the distance):
+// qx, qy relative to the point and the first two derivatives.
+inline void curve_xy_at(const k::KnitGeom& g, F t, F yk, F X, F Y, F& qx, F& qy, F& d1x, F& d1y, F& d2x,
+                        F& d2y) {
+  const F two_pi = fv(6.28318530717958647692f), pi = fv(3.14159265358979323846f);
+  const F tc = two_pi * tof(ifloor(t / two_pi)) + pi;
+  const F tau = t - tc;
+  F s1, c1;
+  sincos_v(tau, s1, c1);
+  const F s2 = fv(2.0f) * s1 * c1, c2 = c1 * c1 - s1 * s1;
+  const F a = fv(g.a), h = fv(g.h);
+  qx = ((tc + tau) + a * s2) - X;
+  qy = (yk + h * c1) - Y;
+  d1x = fv(1.0f) + fv(2.0f) * a * c2;
+  d1y = -h * s1;
+  d2x = fv(-4.0f) * a * s2;
+  d2y = -h * c1;
+}
+
+constexpr float kBig = 1.0e30f;
+constexpr int kBlock = 256;  // points per pass through the stages
+
+// Stages 1-4 for points [0, n) of a block (n <= kBlock).
+void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const float* xs, const float* ys, int n,
+                        SurfaceHit* out, Work& wk) {
+  const k::KnitGeom& g = surf.geom();
+  const int32_t* codes = surf.codes();
+  const int32_t* colors = surf.colors();
+  const float rr_s = g.r * 1.001f + 1.0e-4f;
+  const float m_s = g.r + g.quad_margin;
+  const float r2_s = g.r * g.r;
+  const float top_s = g.shell_top + 0.01f;
+  const F rr = fv(rr_s), pi4 = fv(0.78539816339744830962f), s = fv(g.row_spacing);
+  const F thr = fv(m_s * 1.001f + 1.0e-4f);
+  alignas(64) float xb[kBlock + 16], yb[kBlock + 16];
+  std::memcpy(xb, xs, sizeof(float) * size_t(n));
+  std::memcpy(yb, ys, sizeof(float) * size_t(n));
+  for (int i = n; i < kBlock + 16; ++i) xb[i] = yb[i] = 0.0f;
+
+  // Stage 1: candidates.
+  int ncand = 0;
+  for (int base = 0; base < n; base += 16) {
+    const M lanes = M((n - base >= 16) ? 0xFFFF : ((1u << (n - base)) - 1u));
+    const F X = load(xb + base), Y = load(yb + base);
+    const M vm = lanes & lt(vabs(X), fv(1.0e7f)) & lt(vabs(Y), fv(1.0e7f));
+    if (!vm) continue;
+    const I k0 = ifloor(-(vfloor(-(((Y - fv(g.h)) - rr) / s - fv(0.5f)))));  // ceil
+    const I k1 = ifloor(((Y + fv(g.h)) + rr) / s - fv(0.5f));
+    const I g0 = ifloor(((X - rr) - fv(g.a)) / pi4);
+    const I g1 = ifloor(((X + rr) + fv(g.a)) / pi4);
+    const int nk = _mm512_mask_reduce_max_epi32(vm, (k1 - k0).v) + 1;
+    const int ng = _mm512_mask_reduce_max_epi32(vm, (g1 - g0).v) + 1;
+    const I lane_id = {_mm512_add_epi32(_mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0),
+                                        _mm512_set1_epi32(base))};
+    for (int dk = 0; dk < nk; ++dk) {
+      const I kk = k0 + iv(dk);
+      const M vk = vm & ile(kk, k1);
+      if (!vk) continue;
+      const F yk = (tof(kk) + fv(0.5f)) * s;
+      const F Yl = Y - yk;
+      for (int dg = 0; dg < ng; ++dg) {
+        const I gp = g0 + iv(dg);
+        M v = vk & ile(gp, g1);
+        const I j = gp & iv(7);
+        const F t0 = tof(gp) * pi4;
+        v &= ge(Y, (yk + lookup(kc.oyl, j)) - rr) & le(Y, (yk + lookup(kc.oyh, j)) + rr);
+        v &= ge(X, (t0 + lookup(kc.oxl, j)) - rr) & le(X, ((t0 + pi4) + lookup(kc.oxh, j)) + rr);
+        if (!v) continue;
+        // knit_quad_xy_distance_bound, relative to (t0, y_k)
+        const F q1x = lookup(kc.q1x, j), q1y = lookup(kc.q1y, j), q2x = lookup(kc.q2x, j), q2y = lookup(kc.q2y, j);
+        const F cx = q1x + q2x, cy = q1y + q2y;
+        const F ax = (X - t0) - lookup(kc.q0x, j), ay = Yl - lookup(kc.q0y, j);
+        const F l2 = cx * cx + cy * cy;
+        const M lpos = gt(l2, fv(0.0f));
+        const F u = sel(lpos, clampv((ax * cx + ay * cy) / sel(lpos, l2, fv(1.0f)), fv(0.0f), fv(1.0f)), fv(0.0f));
+        const F dx = ax - u * cx, dy = ay - u * cy;
+        const F bound = vsqrt(dx * dx + dy * dy) - fv(0.25f) * vsqrt(q2x * q2x + q2y * q2y);
+        v &= le(bound, thr);
+        if (!v) continue;
+        compress_store(wk.pt.data() + ncand, v, lane_id);
+        compress_store(wk.row.data() + ncand, v, kk);
+        compress_store(wk.piece.data() + ncand, v, gp);
+        ncand += __builtin_popcount(unsigned(v));
+      }
+    }
+  }
+
+  // Stage 2: closest points (cubic of the interpolant, one Newton step).
+  int nlive = 0;
+  for (int c0 = 0; c0 < ncand; c0 += 16) {
+    const M m = M((ncand - c0 >= 16) ? 0xFFFF : ((1u << (ncand - c0)) - 1u));
+    const I pt = {_mm512_maskz_loadu_epi32(m, wk.pt.data() + c0)};
+    const I kk = {_mm512_maskz_loadu_epi32(m, wk.row.data() + c0)};
+    const I gp = {_mm512_maskz_loadu_epi32(m, wk.piece.data() + c0)};
+    const F X = gather(xb, pt, m), Y = gather(yb, pt, m);
+    const I j = gp & iv(7);
+    const F t0 = tof(gp) * pi4;
+    const F yk = (tof(kk) + fv(0.5f)) * s;
+    const F Ax = lookup(kc.q0x, j) - (X - t0), Ay = lookup(kc.q0y, j) - (Y - yk);
+    const F Bx = lookup(kc.q1x, j), By = lookup(kc.q1y, j), Cx = lookup(kc.q2x, j), Cy = lookup(kc.q2y, j);
+    F r0, r1, r2;
+    I nr;
+    solve_cubic_v(fv(2.0f) * (Cx * Cx + Cy * Cy), fv(3.0f) * (Bx * Cx + By * Cy),
+                  (Bx * Bx + By * By) + fv(2.0f) * (Ax * Cx + Ay * Cy), Ax * Bx + Ay * By, r0, r1, r2, nr);
+    F best = Ax * Ax + Ay * Ay, bu = fv(0.0f);
+    {
+      const F ex = Ax + Bx + Cx, ey = Ay + By + Cy;
+      const F d1 = ex * ex + ey * ey;
+      const M b = lt(d1, best);
+      best = sel(b, d1, best);
+      bu = sel(b, fv(1.0f), bu);
+    }
+    const F roots[3] = {r0, r1, r2};
+    for (int i = 0; i < 3; ++i) {
+      const F x = roots[i];
+      const F ex = Ax + (Bx + Cx * x) * x, ey = Ay + (By + Cy * x) * x;
+      const F dd = ex * ex + ey * ey;
+      const M b = igt(nr, iv(i)) & gt(x, fv(0.0f)) & lt(x, fv(1.0f)) & lt(dd, best);
+      best = sel(b, dd, best);
+      bu = sel(b, x, bu);
+    }
+    const M near = m & le(best, fv(m_s * m_s));
+    F t = t0 + bu * pi4;
+    F qx, qy, d1x, d1y, d2x, d2y;
+    curve_xy_at(g, t, yk, X, Y, qx, qy, d1x, d1y, d2x, d2y);
+    const F phi1 = qx * d1x + qy * d1y;
+    const F phi2 = (d1x * d1x + d1y * d1y) + (qx * d2x + qy * d2y);
+    const M step = gt(phi2, fv(0.0f));
+    t = sel(step, t - clampv(phi1 / sel(step, phi2, fv(1.0f)), fv(-0.4f), fv(0.4f)), t);
+    store(wk.t.data() + c0, sel(near, t, fv(kBig)));
+    const I idx = {_mm512_add_epi32(_mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0),
+                                    _mm512_set1_epi32(c0))};
+    compress_store(wk.live.data() + nlive, near, idx);
+    nlive += __builtin_popcount(unsigned(near));
+  }
+
+  // Stage 3: entries (knit_newton_extreme, sgn = -1, on the exact curve).
+  const F r2 = fv(r2_s), top = fv(top_s);
+  for (int c0 = 0; c0 < nlive; c0 += 16) {
+    const M m = M((nlive - c0 >= 16) ? 0xFFFF : ((1u << (nlive - c0)) - 1u));
+    const I ci = {_mm512_maskz_loadu_epi32(m, wk.live.data() + c0)};
+    const I pt = gather(wk.pt.data(), ci, m);
+    const I kk = gather(wk.row.data(), ci, m);
+    const I gp = gather(wk.piece.data(), ci, m);
+    F t = gather(wk.t.data(), ci, m);
+    SpanV sp;
+    sp.X = gather(xb, pt, m);
+    sp.Y = gather(yb, pt, m);
+    sp.yk = (tof(kk) + fv(0.5f)) * s;
+    sp.cs = {_mm512_srai_epi32(gp.v, 3)};
+    row_offsets(g, kk, sp.off, sp.up, sp.dn);
+    const I cm = modi(sp.cs, g.cols);
+    const I cl = sel(ieq(cm, iv(0)), iv(g.cols - 1), cm - iv(1));
+    const I cr = sel(ieq(cm, iv(g.cols - 1)), iv(0), cm + iv(1));
+    sp.bm = cell_bits(codes, sp.off, sp.up, sp.dn, cm, m);
+    sp.bl = cell_bits(codes, sp.off, sp.up, sp.dn, cl, m);
+    sp.br = cell_bits(codes, sp.off, sp.up, sp.dn, cr, m);
+    CurveV cv = curve_at(g, codes, sp, t, m);
+    F rho2 = cv.qx * cv.qx + cv.qy * cv.qy;
+    const M alive = m & lt(rho2, r2);
+    M active = alive;
+    for (int it = 0; it < 5 && active; ++it) {  // KNIT_NEWTON_EXTREME
+      const F w = vsqrt(vmax(r2 - rho2, fv(0.0f)));
+      const F ws = sel(gt(w, fv(0.0f)), w, fv(1.0f));
+      const F f = (cv.z - top) + w;
+      const F phi1 = cv.qx * cv.d1x + cv.qy * cv.d1y;
+      const F phi2 = (cv.d1x * cv.d1x + cv.d1y * cv.d1y) + (cv.qx * cv.d2x + cv.qy * cv.d2y);
+      const F f1 = cv.z1 - phi1 / ws;
+      const F f2 = (cv.z2 - phi2 / ws) - phi1 * phi1 / (ws * ws * ws);
+      const M concave = lt(f2, fv(0.0f));
+      F step = sel(concave, -f1 / sel(concave, f2, fv(-1.0f)), f1 * fv(0.05f));
+      step = clampv(step, fv(-0.25f), fv(0.25f));
+      active &= ge(vabs(step), fv(1.0e-4f));
+      M pending = active, moved = 0;
+      for (int tries = 0; tries < 4 && pending; ++tries) {
+        const F tn = t + step;
+        const CurveV nc = curve_at(g, codes, sp, tn, pending);
+        const F nrho2 = nc.qx * nc.qx + nc.qy * nc.qy;
+        const M ok = pending & lt(nrho2, r2) &
+                     ge((nc.z - top) + vsqrt(vmax(r2 - nrho2, fv(0.0f))), f);
+        t = sel(ok, tn, t);
+        cv.qx = sel(ok, nc.qx, cv.qx);
+        cv.qy = sel(ok, nc.qy, cv.qy);
+        cv.z = sel(ok, nc.z, cv.z);
+        cv.d1x = sel(ok, nc.d1x, cv.d1x);
+        cv.d1y = sel(ok, nc.d1y, cv.d1y);
+        cv.z1 = sel(ok, nc.z1, cv.z1);
+        cv.d2x = sel(ok, nc.d2x, cv.d2x);
+        cv.d2y = sel(ok, nc.d2y, cv.d2y);
+        cv.z2 = sel(ok, nc.z2, cv.z2);
+        rho2 = sel(ok, nrho2, rho2);
+        moved |= ok;
+        pending &= ~ok;
+        step = sel(pending, step * fv(0.5f), step);
+      }
+      active &= moved;
+    }
+    const F w = vsqrt(vmax(r2 - rho2, fv(0.0f)));
+    const F s_in = (top - cv.z) - w;
+    const F pz = top - s_in;
+    // normal: (p - Y(t)) / |.|, tangent: Y'(t) / |.|
+    const F nzv = pz - cv.z;
+    const F nl = vsqrt(cv.qx * cv.qx + cv.qy * cv.qy + nzv * nzv);
+    const F nli = fv(1.0f) / sel(gt(nl, fv(0.0f)), nl, fv(1.0f));
+    const F tl = vsqrt(cv.d1x * cv.d1x + cv.d1y * cv.d1y + cv.z1 * cv.z1);
+    const F tli = fv(1.0f) / sel(gt(tl, fv(0.0f)), tl, fv(1.0f));
+    const I col = ifloor(t / fv(6.28318530717958647692f));
+    _mm512_mask_i32scatter_ps(wk.s_in.data(), m, ci.v, s_in.v, 4);
+    _mm512_mask_i32scatter_ps(wk.pz.data(), m, ci.v, pz.v, 4);
+    _mm512_mask_i32scatter_ps(wk.nx.data(), m, ci.v, (-cv.qx * nli).v, 4);
+    _mm512_mask_i32scatter_ps(wk.ny.data(), m, ci.v, (-cv.qy * nli).v, 4);
+    _mm512_mask_i32scatter_ps(wk.nz.data(), m, ci.v, (nzv * nli).v, 4);
+    _mm512_mask_i32scatter_ps(wk.tx.data(), m, ci.v, (cv.d1x * tli).v, 4);
+    _mm512_mask_i32scatter_ps(wk.ty.data(), m, ci.v, (cv.d1y * tli).v, 4);
+    _mm512_mask_i32scatter_ps(wk.tz.data(), m, ci.v, (cv.z1 * tli).v, 4);
+    _mm512_mask_i32scatter_epi32(wk.hit.data(), m, ci.v, sel(alive, iv(1), iv(0)).v, 4);
+    _mm512_mask_i32scatter_epi32(wk.col.data(), m, ci.v, col.v, 4);
+  }
+
+  // Stage 4: per point, in row and piece order (knit_line_query's loop).
+  int cur_row[kBlock], best_i[kBlock], count[kBlock];
+  float last_t[kBlock], prev_t[kBlock], best_s[kBlock];
+  for (int i = 0; i < n; ++i) {
+    cur_row[i] = INT32_MIN;
+    best_i[i] = -1;
+    count[i] = 0;
+    best_s[i] = kBig;
+  }
+  const float s_max = 2.0f * top_s;
+  for (int c = 0; c < ncand; ++c) {
+    const int p = wk.pt[size_t(c)];
+    if (wk.row[size_t(c)] != cur_row[p]) {
+      cur_row[p] = wk.row[size_t(c)];
+      last_t[p] = prev_t[p] = -kBig;
+    }
+    const float t = wk.t[size_t(c)];
+    if (t == kBig || std::fabs(t - last_t[p]) < 0.1f || std::fabs(t - prev_t[p]) < 0.1f) continue;
+    if (!wk.hit[size_t(c)]) continue;
+    prev_t[p] = last_t[p];
+    last_t[p] = t;
+    const float si = wk.s_in[size_t(c)];
+    if (si <= s_max) ++count[p];
+    if (si >= 0.0f && si <= s_max && si < best_s[p]) {
+      best_s[p] = si;
+      best_i[p] = c;
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    SurfaceHit h;
+    h.layers = count[i];
+    const int c = best_i[i];
+    if (c >= 0) {
+      const size_t cz = size_t(c);
+      h.hit = true;
+      h.position = k::kv3(xb[i], yb[i], wk.pz[cz]);
+      h.normal = k::kv3(wk.nx[cz], wk.ny[cz], wk.nz[cz]);
+      h.tangent = k::kv3(wk.tx[cz], wk.ty[cz], wk.tz[cz]);
+      h.row = wk.row[cz];
+      h.col = wk.col[cz];
+      const k::KRow rw = k::knit_row(g, h.row);
+      const int ci = k::k_modi(h.col, g.cols);
+      h.stitch = codes[rw.off + ci];
+      h.color = colors[rw.off + ci];
+    }
+    out[i] = h;
+  }
+}
+
+void query_avx512(const KnitSurface& surf, const float* x, const float* y, size_t n, SurfaceHit* out) {
+  const k::KnitGeom& g = surf.geom();
+  const BatchConsts kc = make_consts(g);
+  const float rr = g.r * 1.001f + 1.0e-4f;
+  const size_t nk = size_t(std::floor(2.0f * (g.h + rr) / g.row_spacing)) + 2;
+  const size_t ng = size_t(std::floor(2.0f * (rr + g.a) / 0.78539816f)) + 2;
+  const size_t cap = size_t(kBlock) * nk * ng + 32;
+  static thread_local Work wk;  // reused between calls: no allocation per call
+  for (auto* v : {&wk.pt, &wk.row, &wk.piece, &wk.hit, &wk.col, &wk.live}) if (v->size() < cap) v->assign(cap, 0);
+  for (auto* v : {&wk.t, &wk.s_in, &wk.px, &wk.py, &wk.pz, &wk.nx, &wk.ny, &wk.nz, &wk.tx, &wk.ty, &wk.tz})
+    if (v->size() < cap) v->assign(cap, 0.0f);
+  for (size_t b = 0; b < n; b += kBlock) {
+    const int nb = int(std::min<size_t>(kBlock, n - b));
+    query_block_avx512(surf, kc, x + b, y + b, nb, out + b, wk);
+  }
+}
+
+#pragma GCC diagnostic pop
+#pragma GCC pop_options
+
+#endif  // KNIT_HAVE_AVX512_PATH
+
+}  // namespace
+
+bool KnitSurface::batch_simd_available() {
+#if KNIT_HAVE_AVX512_PATH
+  return cpu_has_avx512();
+#else
+  return false;
+#endif
+}
+
+bool KnitSurface::batch_uses_simd(BatchPath path) const {
+  if (path == BatchPath::Scalar) return false;
+  const bool ok = batch_simd_available() && geom_.has_floats == 0;
+  if (path == BatchPath::Simd && !ok)
+    throw std::invalid_argument(batch_simd_available()
+                                    ? "query_batch: the SIMD path takes knit and purl stitches only (this "
+                                      "pattern has slip stitches)"
+                                    : "query_batch: this CPU has no AVX-512 (or the build is not x86-64)");
+  return ok;
+}
+
+void KnitSurface::query_batch(const float* x, const float* y, size_t n, SurfaceHit* out, BatchPath path) const {
+  if (n == 0) return;
+  if (!x || !y || !out) throw std::invalid_argument("query_batch: null array");
+#if KNIT_HAVE_AVX512_PATH
+  if (batch_uses_simd(path)) {
+    query_avx512(*this, x, y, n, out);
+    return;
+  }
+#else
+  (void)batch_uses_simd(path);
+#endif
+  query_scalar(*this, x, y, n, out);
+}
+
+}  // namespace knit
