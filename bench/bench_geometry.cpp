@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "knit/surface.h"
@@ -54,6 +55,28 @@ void BM_VerticalQuery(benchmark::State& state) {
   state.SetLabel(state.range(0) == 0 ? "stockinette" : "pyramid16");
 }
 BENCHMARK(BM_VerticalQuery)->Arg(0)->Arg(1);
+
+// The same queries through KnitSurface::query_batch, 4096 points per call
+// (AVX-512, 16 points at a time, where the CPU has it: the label says which
+// path ran). Arg 2 forces the scalar path for the ratio in one run.
+void BM_VerticalQueryBatch(benchmark::State& state) {
+  const Pattern pat = state.range(0) == 0 ? test::stockinette() : test::pyramid16();
+  KnitSurface s(pat, StitchParams{});
+  Pts p = random_points(s, 4096, 1);
+  std::vector<SurfaceHit> out(4096);
+  const auto path = state.range(1) != 0 ? KnitSurface::BatchPath::Scalar : KnitSurface::BatchPath::Auto;
+  long hits = 0;
+  for (auto _ : state) {
+    s.query_batch(p.x.data(), p.y.data(), 4096, out.data(), path);
+    hits += out[0].hit;
+    benchmark::DoNotOptimize(out.data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["q/s"] = benchmark::Counter(4096.0 * double(state.iterations()), benchmark::Counter::kIsRate);
+  state.SetLabel(std::string(state.range(0) == 0 ? "stockinette" : "pyramid16") +
+                 (s.batch_uses_simd(path) ? " avx512" : " scalar"));
+}
+BENCHMARK(BM_VerticalQueryBatch)->ArgsProduct({{0, 1}, {0, 1}});
 
 // The kernel call alone (no SurfaceHit conversion, no layer count).
 void BM_KernelLineQuery(benchmark::State& state) {

@@ -5,9 +5,11 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "bindings.h"
 #include "knit/surface.h"
@@ -122,11 +124,24 @@ class PyKnitSurface {
     HitArrays out(P.n);
     ::py::array_t<double> z(P.n);
     double* pz = z.mutable_data();
-    for_each_row(P.n, [&](ssize_t i) {
-      const float x = float(uv_scale_ * P.pu[P.su ? 0 : i]), y = float(uv_scale_ * P.pv[P.sv ? 0 : i]);
-      const SurfaceHit h = surf_.query(x, y);
-      out.set(i, h, x, y);
-      pz[i] = h.hit ? h.position.z : std::nan("");
+    // Blocks of kQueryBlock points through KnitSurface::query_batch (16 at
+    // a time with AVX-512 where the CPU has it), the blocks on every core.
+    constexpr ssize_t kQueryBlock = 1024;
+    const ssize_t nblocks = (P.n + kQueryBlock - 1) / kQueryBlock;
+    for_each_row(nblocks, [&](ssize_t b) {
+      const ssize_t i0 = b * kQueryBlock, m = std::min(kQueryBlock, P.n - i0);
+      std::vector<float> xs(static_cast<size_t>(m)), ys(static_cast<size_t>(m));
+      std::vector<SurfaceHit> hs(static_cast<size_t>(m));
+      for (ssize_t j = 0; j < m; ++j) {
+        const ssize_t i = i0 + j;
+        xs[j] = float(uv_scale_ * P.pu[P.su ? 0 : i]);
+        ys[j] = float(uv_scale_ * P.pv[P.sv ? 0 : i]);
+      }
+      surf_.query_batch(xs.data(), ys.data(), size_t(m), hs.data());
+      for (ssize_t j = 0; j < m; ++j) {
+        out.set(i0 + j, hs[j], xs[j], ys[j]);
+        pz[i0 + j] = hs[j].hit ? hs[j].position.z : std::nan("");
+      }
     });
     ::py::dict d = out.dict();
     d["z"] = z;
@@ -361,7 +376,10 @@ from above along the line through (uv_scale*u, uv_scale*v). Returns a dict of
 arrays: hit (bool), z (height of that surface, nan on a miss), position (N,3),
 normal (N,3, outward tube normal), tangent (N,3, unit yarn direction), layers
 (number of tubes the vertical line crosses), stitch (code, -1 on a miss),
-color (colour index, -1 on a miss), row, col (cell of the yarn hit).)doc")
+color (colour index, -1 on a miss), row, col (cell of the yarn hit).
+Runs 16 points at a time with AVX-512 where the CPU has it and the pattern has
+knit and purl stitches only (the same results up to float rounding), on every
+core for large arrays.)doc")
       .def("crossings", &PyKnitSurface::crossings, ::py::arg("u"), ::py::arg("v"), R"doc(
 Every yarn tube crossed by the vertical line at one UV point, top first: a
 list of dicts with z_top and z_bottom (entry and exit heights), normal and

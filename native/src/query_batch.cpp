@@ -137,6 +137,7 @@ inline F load(const float* p) { return {_mm512_loadu_ps(p)}; }
 inline I load(const int32_t* p) { return {_mm512_loadu_si512(p)}; }
 inline void store(float* p, F a) { _mm512_storeu_ps(p, a.v); }
 inline void store(int32_t* p, I a) { _mm512_storeu_si512(p, a.v); }
+inline void compress_store(float* p, M m, F a) { _mm512_storeu_ps(p, _mm512_maskz_compress_ps(m, a.v)); }
 // The lanes of a selected by m, packed to the front, stored at p (16 ints
 // are written: p needs 16 of room). A compress in a register and a plain
 // store: the compress-to-memory instruction is microcoded and slow on some
@@ -220,12 +221,13 @@ inline void solve_cubic_v(F a3, F a2, F a1, F a0, F& r0, F& r1, F& r2, I& nroots
   const M quad = le(vabs(a3), fv(1.0e-6f) * scale) | eq(a3, fv(0.0f));
   // cubic branch
   const F a3s = sel(quad, fv(1.0f), a3);
-  const F b = a2 / a3s, c = a1 / a3s, d = a0 / a3s;
-  const F b3 = b / fv(3.0f);
+  const F inv3 = fv(1.0f) / a3s;
+  const F b = a2 * inv3, c = a1 * inv3, d = a0 * inv3;
+  const F b3 = b * fv(1.0f / 3.0f);
   const F p = c - b * b3;
   const F q = fv(2.0f) * b3 * b3 * b3 - b3 * c + d;
   const F hq = fv(0.5f) * q;
-  const F tp = p / fv(3.0f);
+  const F tp = p * fv(1.0f / 3.0f);
   const F disc = hq * hq + tp * tp * tp;
   const M one = gt(disc, fv(0.0f));
   const M triple = ~one & eq(tp, fv(0.0f));
@@ -234,7 +236,8 @@ inline void solve_cubic_v(F a3, F a2, F a1, F a0, F& r0, F& r1, F& r2, I& nroots
   const F root1 = A + Bc - b3;
   const F mm = fv(2.0f) * vsqrt(vmax(-tp, fv(0.0f)));
   const F den = p * mm;
-  const F phi = acos_v(clampv(fv(3.0f) * q / sel(ne(den, fv(0.0f)), den, fv(1.0f)), fv(-1.0f), fv(1.0f))) / fv(3.0f);
+  const F phi = acos_v(clampv(fv(3.0f) * q / sel(ne(den, fv(0.0f)), den, fv(1.0f)), fv(-1.0f), fv(1.0f))) *
+                fv(1.0f / 3.0f);
   F sp, cp;
   sincos_v(phi, sp, cp);
   const F hc = fv(-0.5f) * cp, hs = fv(0.86602540378443864676f) * sp;
@@ -329,12 +332,19 @@ inline void depth_coeffs(I bits, F& A, F& B, F& sl) {
 }
 
 struct Work {
-  // stage 1 output: candidates in (point, row, piece) order per point
+  // stage 1: candidates, in row and piece order for each point
   std::vector<int32_t> pt, row, piece;
-  // stage 2/3 per candidate
-  std::vector<float> t, s_in, px, py, pz, nx, ny, nz, tx, ty, tz;
-  std::vector<int32_t> hit, col;
-  std::vector<int32_t> live;  // candidates with a closest point within m
+  // stage 2: each candidate's closest-point parameter (kBig: none within m)
+  std::vector<float> t;
+  // stage 2 -> 3: the live candidates (closest point within m), in
+  // candidate order: parameter, point, row centre, span column, row and
+  // the depth bits of the span's three cells (3 bits each)
+  std::vector<float> l_t, l_x, l_y, l_yk;
+  std::vector<int32_t> l_cs, l_k, l_bits;
+  // stage 3: entries, in the order the lanes finish them, with their live slot
+  std::vector<int32_t> o_slot, o_hit, o_col;
+  std::vector<float> o_pz, o_nx, o_ny, o_nz, o_tx, o_ty, o_tz, o_sin;
+  std::vector<int32_t> pos_of;  // live slot -> index in the o_ arrays
 };
 
 
@@ -359,7 +369,7 @@ inline void row_offsets(const k::KnitGeom& g, I k, I& off, I& up, I& dn) {
 // A chunk of candidates in stage 3: each lane's row, span (the cells
 // around the piece's column cs) and point.
 struct SpanV {
-  I cs, off, up, dn;
+  I cs, k;
   I bl, bm, br;  // depth bits of columns cs - 1, cs, cs + 1
   F yk, X, Y;
 };
@@ -370,7 +380,11 @@ inline I bits_of(const k::KnitGeom& g, const int32_t* codes, const SpanV& sp, I 
   const I d = c - sp.cs;
   I b = sel(ilt(d, iv(0)), sp.bl, sel(igt(d, iv(0)), sp.br, sp.bm));
   const M far = m & (ilt(d, iv(-1)) | igt(d, iv(1)));
-  if (far) b = sel(far, cell_bits(codes, sp.off, sp.up, sp.dn, modi(c, g.cols), far), b);
+  if (far) {
+    I off, up, dn;
+    row_offsets(g, sp.k, off, up, dn);
+    b = sel(far, cell_bits(codes, off, up, dn, modi(c, g.cols), far), b);
+  }
   return b;
 }
 
@@ -380,7 +394,7 @@ inline I bits_of(const k::KnitGeom& g, const int32_t* codes, const SpanV& sp, I 
 // on the cells, so the neighbour's profile shares sin and cos).
 inline CurveV curve_at(const k::KnitGeom& g, const int32_t* codes, const SpanV& sp, F t, M m) {
   const F two_pi = fv(6.28318530717958647692f), pi = fv(3.14159265358979323846f), pi4 = fv(0.78539816339744830962f);
-  const I c = ifloor(t / two_pi);
+  const I c = ifloor(t * fv(0.15915494309189533577f));
   const F tc = two_pi * tof(c) + pi;
   const F tau = t - tc;
   const I side = sel(gt(tau, pi - pi4), iv(1), sel(lt(tau, pi4 - pi), iv(-1), iv(0)));
@@ -412,12 +426,12 @@ inline CurveV curve_at(const k::KnitGeom& g, const int32_t* codes, const SpanV& 
   const F zlo = sel(self_lo, zs, zn), z1lo = sel(self_lo, z1s, z1n), z2lo = sel(self_lo, z2s, z2n);
   const F e0 = sel(self_lo, zn, zs) - zlo, e1 = sel(self_lo, z1n, z1s) - z1lo, e2 = sel(self_lo, z2n, z2s) - z2lo;
   const F tb = two_pi * tof(sel(igt(nc, c), nc, c));
-  const F w2 = fv(1.57079632679489661923f);
-  const F xw = clampv((t - (tb - pi4)) / w2, fv(0.0f), fv(1.0f));
+  const F iw2 = fv(0.63661977236758134308f);  // 1 / w2
+  const F xw = clampv((t - (tb - pi4)) * iw2, fv(0.0f), fv(1.0f));
   const F xw2 = xw * xw;
   const F w = xw2 * xw * (fv(10.0f) + xw * (fv(-15.0f) + fv(6.0f) * xw));
-  const F dw = fv(30.0f) * xw2 * (xw - fv(1.0f)) * (xw - fv(1.0f)) / w2;
-  const F ddw = fv(60.0f) * xw * (xw - fv(1.0f)) * (fv(2.0f) * xw - fv(1.0f)) / (w2 * w2);
+  const F dw = fv(30.0f) * xw2 * (xw - fv(1.0f)) * (xw - fv(1.0f)) * iw2;
+  const F ddw = fv(60.0f) * xw * (xw - fv(1.0f)) * (fv(2.0f) * xw - fv(1.0f)) * (iw2 * iw2);
   cv.z = zlo + e0 * w;
   cv.z1 = (z1lo + e1 * w) + e0 * dw;
   cv.z2 = ((z2lo + e2 * w) + e1 * (fv(2.0f) * dw)) + e0 * ddw;
@@ -429,7 +443,7 @@ inline CurveV curve_at(const k::KnitGeom& g, const int32_t* codes, const SpanV& 
 inline void curve_xy_at(const k::KnitGeom& g, F t, F yk, F X, F Y, F& qx, F& qy, F& d1x, F& d1y, F& d2x,
                         F& d2y) {
   const F two_pi = fv(6.28318530717958647692f), pi = fv(3.14159265358979323846f);
-  const F tc = two_pi * tof(ifloor(t / two_pi)) + pi;
+  const F tc = two_pi * tof(ifloor(t * fv(0.15915494309189533577f))) + pi;
   const F tau = t - tc;
   F s1, c1;
   sincos_v(tau, s1, c1);
@@ -513,6 +527,7 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
 
   // Stage 2: closest points (cubic of the interpolant, one Newton step).
   int nlive = 0;
+  const I lane_ix = {_mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0)};
   for (int c0 = 0; c0 < ncand; c0 += 16) {
     const M m = M((ncand - c0 >= 16) ? 0xFFFF : ((1u << (ncand - c0)) - 1u));
     const I pt = {_mm512_maskz_loadu_epi32(m, wk.pt.data() + c0)};
@@ -554,56 +569,105 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
     const M step = gt(phi2, fv(0.0f));
     t = sel(step, t - clampv(phi1 / sel(step, phi2, fv(1.0f)), fv(-0.4f), fv(0.4f)), t);
     store(wk.t.data() + c0, sel(near, t, fv(kBig)));
-    const I idx = {_mm512_add_epi32(_mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0),
-                                    _mm512_set1_epi32(c0))};
-    compress_store(wk.live.data() + nlive, near, idx);
+    if (!near) continue;
+    // the live ones, with what stage 3 needs of them
+    I off, up, dn;
+    row_offsets(g, kk, off, up, dn);
+    const I cs = {_mm512_srai_epi32(gp.v, 3)};
+    const I cm = modi(cs, g.cols);
+    const I cl = sel(ieq(cm, iv(0)), iv(g.cols - 1), cm - iv(1));
+    const I cr = sel(ieq(cm, iv(g.cols - 1)), iv(0), cm + iv(1));
+    const I bits = cell_bits(codes, off, up, dn, cl, near) +
+                   I{_mm512_slli_epi32(cell_bits(codes, off, up, dn, cm, near).v, 3)} +
+                   I{_mm512_slli_epi32(cell_bits(codes, off, up, dn, cr, near).v, 6)};
+    compress_store(wk.l_t.data() + nlive, near, t);
+    compress_store(wk.l_x.data() + nlive, near, X);
+    compress_store(wk.l_y.data() + nlive, near, Y);
+    compress_store(wk.l_yk.data() + nlive, near, yk);
+    compress_store(wk.l_cs.data() + nlive, near, cs);
+    compress_store(wk.l_k.data() + nlive, near, kk);
+    compress_store(wk.l_bits.data() + nlive, near, bits);
     nlive += __builtin_popcount(unsigned(near));
   }
 
   // Stage 3: entries (knit_newton_extreme, sgn = -1, on the exact curve).
+  // Each lane runs one candidate's search and takes the next live one as
+  // soon as it is done, so a vector is never held up by its slowest lane.
+  // Every round evaluates the curve once per lane: a new candidate's start,
+  // or the trial point of a Newton step (which is accepted, or halved).
   const F r2 = fv(r2_s), top = fv(top_s);
-  for (int c0 = 0; c0 < nlive; c0 += 16) {
-    const M m = M((nlive - c0 >= 16) ? 0xFFFF : ((1u << (nlive - c0)) - 1u));
-    const I ci = {_mm512_maskz_loadu_epi32(m, wk.live.data() + c0)};
-    const I pt = gather(wk.pt.data(), ci, m);
-    const I kk = gather(wk.row.data(), ci, m);
-    const I gp = gather(wk.piece.data(), ci, m);
-    F t = gather(wk.t.data(), ci, m);
-    SpanV sp;
-    sp.X = gather(xb, pt, m);
-    sp.Y = gather(yb, pt, m);
-    sp.yk = (tof(kk) + fv(0.5f)) * s;
-    sp.cs = {_mm512_srai_epi32(gp.v, 3)};
-    row_offsets(g, kk, sp.off, sp.up, sp.dn);
-    const I cm = modi(sp.cs, g.cols);
-    const I cl = sel(ieq(cm, iv(0)), iv(g.cols - 1), cm - iv(1));
-    const I cr = sel(ieq(cm, iv(g.cols - 1)), iv(0), cm + iv(1));
-    sp.bm = cell_bits(codes, sp.off, sp.up, sp.dn, cm, m);
-    sp.bl = cell_bits(codes, sp.off, sp.up, sp.dn, cl, m);
-    sp.br = cell_bits(codes, sp.off, sp.up, sp.dn, cr, m);
-    CurveV cv = curve_at(g, codes, sp, t, m);
-    F rho2 = cv.qx * cv.qx + cv.qy * cv.qy;
-    const M alive = m & lt(rho2, r2);
-    M active = alive;
-    for (int it = 0; it < 5 && active; ++it) {  // KNIT_NEWTON_EXTREME
-      const F w = vsqrt(vmax(r2 - rho2, fv(0.0f)));
-      const F ws = sel(gt(w, fv(0.0f)), w, fv(1.0f));
-      const F f = (cv.z - top) + w;
-      const F phi1 = cv.qx * cv.d1x + cv.qy * cv.d1y;
-      const F phi2 = (cv.d1x * cv.d1x + cv.d1y * cv.d1y) + (cv.qx * cv.d2x + cv.qy * cv.d2y);
-      const F f1 = cv.z1 - phi1 / ws;
-      const F f2 = (cv.z2 - phi2 / ws) - phi1 * phi1 / (ws * ws * ws);
-      const M concave = lt(f2, fv(0.0f));
-      F step = sel(concave, -f1 / sel(concave, f2, fv(-1.0f)), f1 * fv(0.05f));
-      step = clampv(step, fv(-0.25f), fv(0.25f));
-      active &= ge(vabs(step), fv(1.0e-4f));
-      M pending = active, moved = 0;
-      for (int tries = 0; tries < 4 && pending; ++tries) {
-        const F tn = t + step;
-        const CurveV nc = curve_at(g, codes, sp, tn, pending);
+  int nout = 0;
+  {
+    enum { kIdle = 0, kInit = 1, kStep = 2, kTrial = 3 };
+    I phase = iv(kIdle), slot = iv(-1), it = iv(0), tries = iv(0);
+    F t = fv(0.0f), f = fv(0.0f), step = fv(0.0f), rho2 = fv(0.0f);
+    CurveV cv{fv(0.0f), fv(0.0f), fv(0.0f), fv(0.0f), fv(0.0f), fv(0.0f), fv(0.0f), fv(0.0f), fv(0.0f)};
+    SpanV sp{iv(0), iv(0), iv(0), iv(0), iv(0), fv(0.0f), fv(0.0f), fv(0.0f)};
+    int next = 0;
+    for (;;) {
+      // refill idle lanes, in live order
+      const M idle = ieq(phase, iv(kIdle));
+      const int take = std::min(__builtin_popcount(unsigned(idle)), nlive - next);
+      if (take > 0) {
+        const M nw = M(_pdep_u32((1u << take) - 1u, unsigned(idle)));
+        auto ex_f = [&](const std::vector<float>& a, F old) {
+          return F{_mm512_mask_expand_ps(old.v, nw, _mm512_loadu_ps(a.data() + next))};
+        };
+        auto ex_i = [&](const std::vector<int32_t>& a, I old) {
+          return I{_mm512_mask_expand_epi32(old.v, nw, _mm512_loadu_si512(a.data() + next))};
+        };
+        t = ex_f(wk.l_t, t);
+        sp.X = ex_f(wk.l_x, sp.X);
+        sp.Y = ex_f(wk.l_y, sp.Y);
+        sp.yk = ex_f(wk.l_yk, sp.yk);
+        sp.cs = ex_i(wk.l_cs, sp.cs);
+        sp.k = ex_i(wk.l_k, sp.k);
+        const I bits = ex_i(wk.l_bits, iv(0));
+        sp.bl = sel(nw, bits & iv(7), sp.bl);
+        sp.bm = sel(nw, I{_mm512_srli_epi32(bits.v, 3)} & iv(7), sp.bm);
+        sp.br = sel(nw, I{_mm512_srli_epi32(bits.v, 6)} & iv(7), sp.br);
+        slot = I{_mm512_mask_expand_epi32(slot.v, nw, (lane_ix + iv(next)).v)};
+        phase = sel(nw, iv(kInit), phase);
+        it = sel(nw, iv(0), it);
+        next += take;
+      }
+      M busy = ~ieq(phase, iv(kIdle));
+      if (!busy) break;
+      M fin = 0, fin_hit = 0;
+      // lanes with an accepted point: the next Newton step, or done
+      {
+        const M st = ieq(phase, iv(kStep));
+        if (st) {
+          const F w = vsqrt(vmax(r2 - rho2, fv(0.0f)));
+          const F iws = fv(1.0f) / sel(gt(w, fv(0.0f)), w, fv(1.0f));
+          const F phi1 = cv.qx * cv.d1x + cv.qy * cv.d1y;
+          const F phi2 = (cv.d1x * cv.d1x + cv.d1y * cv.d1y) + (cv.qx * cv.d2x + cv.qy * cv.d2y);
+          const F f1 = cv.z1 - phi1 * iws;
+          const F f2 = (cv.z2 - phi2 * iws) - phi1 * phi1 * (iws * iws * iws);
+          const M concave = lt(f2, fv(0.0f));
+          F sn = sel(concave, -f1 / sel(concave, f2, fv(-1.0f)), f1 * fv(0.05f));
+          sn = clampv(sn, fv(-0.25f), fv(0.25f));
+          const M done = st & (ieq(it, iv(5)) | lt(vabs(sn), fv(1.0e-4f)));  // KNIT_NEWTON_EXTREME
+          fin |= done;
+          fin_hit |= done;
+          const M go = st & ~done;
+          f = sel(go, (cv.z - top) + w, f);
+          step = sel(go, sn, step);
+          it = sel(go, it + iv(1), it);
+          tries = sel(go, iv(0), tries);
+          phase = sel(go, iv(kTrial), phase);
+        }
+      }
+      // one curve evaluation for the lanes at a start or a trial point
+      const M init = ieq(phase, iv(kInit)), trial = ieq(phase, iv(kTrial));
+      const M ev = init | trial;
+      if (ev) {
+        const F tn = sel(trial, t + step, t);
+        const CurveV nc = curve_at(g, codes, sp, tn, ev);
         const F nrho2 = nc.qx * nc.qx + nc.qy * nc.qy;
-        const M ok = pending & lt(nrho2, r2) &
-                     ge((nc.z - top) + vsqrt(vmax(r2 - nrho2, fv(0.0f))), f);
+        const M inside = lt(nrho2, r2);
+        const M ok = (init & inside) |
+                     (trial & inside & ge((nc.z - top) + vsqrt(vmax(r2 - nrho2, fv(0.0f))), f));
         t = sel(ok, tn, t);
         cv.qx = sel(ok, nc.qx, cv.qx);
         cv.qy = sel(ok, nc.qy, cv.qy);
@@ -615,36 +679,45 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
         cv.d2y = sel(ok, nc.d2y, cv.d2y);
         cv.z2 = sel(ok, nc.z2, cv.z2);
         rho2 = sel(ok, nrho2, rho2);
-        moved |= ok;
-        pending &= ~ok;
-        step = sel(pending, step * fv(0.5f), step);
+        phase = sel(ok, iv(kStep), phase);
+        fin |= init & ~inside;  // the start is outside the tube: no crossing
+        const M rej = trial & ~ok;
+        tries = sel(rej, tries + iv(1), tries);
+        step = sel(rej, step * fv(0.5f), step);
+        const M gave_up = rej & ieq(tries, iv(4));
+        fin |= gave_up;
+        fin_hit |= gave_up;
       }
-      active &= moved;
+      if (fin) {
+        const F w = vsqrt(vmax(r2 - rho2, fv(0.0f)));
+        const F s_in = (top - cv.z) - w;
+        const F pz = top - s_in;
+        const F nzv = pz - cv.z;  // normal: (p - Y(t)) / |.|, tangent: Y'(t) / |.|
+        const F nl = vsqrt(cv.qx * cv.qx + cv.qy * cv.qy + nzv * nzv);
+        const F nli = fv(1.0f) / sel(gt(nl, fv(0.0f)), nl, fv(1.0f));
+        const F tl = vsqrt(cv.d1x * cv.d1x + cv.d1y * cv.d1y + cv.z1 * cv.z1);
+        const F tli = fv(1.0f) / sel(gt(tl, fv(0.0f)), tl, fv(1.0f));
+        const I col = ifloor(t * fv(0.15915494309189533577f));
+        compress_store(wk.o_slot.data() + nout, fin, slot);
+        compress_store(wk.o_hit.data() + nout, fin, sel(fin_hit, iv(1), iv(0)));
+        compress_store(wk.o_col.data() + nout, fin, col);
+        compress_store(wk.o_sin.data() + nout, fin, s_in);
+        compress_store(wk.o_pz.data() + nout, fin, pz);
+        compress_store(wk.o_nx.data() + nout, fin, -cv.qx * nli);
+        compress_store(wk.o_ny.data() + nout, fin, -cv.qy * nli);
+        compress_store(wk.o_nz.data() + nout, fin, nzv * nli);
+        compress_store(wk.o_tx.data() + nout, fin, cv.d1x * tli);
+        compress_store(wk.o_ty.data() + nout, fin, cv.d1y * tli);
+        compress_store(wk.o_tz.data() + nout, fin, cv.z1 * tli);
+        nout += __builtin_popcount(unsigned(fin));
+        phase = sel(fin, iv(kIdle), phase);
+      }
     }
-    const F w = vsqrt(vmax(r2 - rho2, fv(0.0f)));
-    const F s_in = (top - cv.z) - w;
-    const F pz = top - s_in;
-    // normal: (p - Y(t)) / |.|, tangent: Y'(t) / |.|
-    const F nzv = pz - cv.z;
-    const F nl = vsqrt(cv.qx * cv.qx + cv.qy * cv.qy + nzv * nzv);
-    const F nli = fv(1.0f) / sel(gt(nl, fv(0.0f)), nl, fv(1.0f));
-    const F tl = vsqrt(cv.d1x * cv.d1x + cv.d1y * cv.d1y + cv.z1 * cv.z1);
-    const F tli = fv(1.0f) / sel(gt(tl, fv(0.0f)), tl, fv(1.0f));
-    const I col = ifloor(t / fv(6.28318530717958647692f));
-    _mm512_mask_i32scatter_ps(wk.s_in.data(), m, ci.v, s_in.v, 4);
-    _mm512_mask_i32scatter_ps(wk.pz.data(), m, ci.v, pz.v, 4);
-    _mm512_mask_i32scatter_ps(wk.nx.data(), m, ci.v, (-cv.qx * nli).v, 4);
-    _mm512_mask_i32scatter_ps(wk.ny.data(), m, ci.v, (-cv.qy * nli).v, 4);
-    _mm512_mask_i32scatter_ps(wk.nz.data(), m, ci.v, (nzv * nli).v, 4);
-    _mm512_mask_i32scatter_ps(wk.tx.data(), m, ci.v, (cv.d1x * tli).v, 4);
-    _mm512_mask_i32scatter_ps(wk.ty.data(), m, ci.v, (cv.d1y * tli).v, 4);
-    _mm512_mask_i32scatter_ps(wk.tz.data(), m, ci.v, (cv.z1 * tli).v, 4);
-    _mm512_mask_i32scatter_epi32(wk.hit.data(), m, ci.v, sel(alive, iv(1), iv(0)).v, 4);
-    _mm512_mask_i32scatter_epi32(wk.col.data(), m, ci.v, col.v, 4);
   }
+  for (int i = 0; i < nout; ++i) wk.pos_of[size_t(wk.o_slot[size_t(i)])] = i;
 
   // Stage 4: per point, in row and piece order (knit_line_query's loop).
-  int cur_row[kBlock], best_i[kBlock], count[kBlock];
+  int cur_row[kBlock], best_i[kBlock], best_row[kBlock], count[kBlock];
   float last_t[kBlock], prev_t[kBlock], best_s[kBlock];
   for (int i = 0; i < n; ++i) {
     cur_row[i] = INT32_MIN;
@@ -653,42 +726,44 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
     best_s[i] = kBig;
   }
   const float s_max = 2.0f * top_s;
+  int lslot = 0;
   for (int c = 0; c < ncand; ++c) {
+    const float t = wk.t[size_t(c)];
+    if (t == kBig) continue;
+    const int o = wk.pos_of[size_t(lslot++)];
     const int p = wk.pt[size_t(c)];
     if (wk.row[size_t(c)] != cur_row[p]) {
       cur_row[p] = wk.row[size_t(c)];
       last_t[p] = prev_t[p] = -kBig;
     }
-    const float t = wk.t[size_t(c)];
-    if (t == kBig || std::fabs(t - last_t[p]) < 0.1f || std::fabs(t - prev_t[p]) < 0.1f) continue;
-    if (!wk.hit[size_t(c)]) continue;
+    if (std::fabs(t - last_t[p]) < 0.1f || std::fabs(t - prev_t[p]) < 0.1f) continue;
+    if (!wk.o_hit[size_t(o)]) continue;
     prev_t[p] = last_t[p];
     last_t[p] = t;
-    const float si = wk.s_in[size_t(c)];
+    const float si = wk.o_sin[size_t(o)];
     if (si <= s_max) ++count[p];
     if (si >= 0.0f && si <= s_max && si < best_s[p]) {
       best_s[p] = si;
-      best_i[p] = c;
+      best_i[p] = o;
+      best_row[p] = wk.row[size_t(c)];
     }
   }
   for (int i = 0; i < n; ++i) {
-    SurfaceHit h;
+    SurfaceHit& h = out[i];
+    h = SurfaceHit{};
     h.layers = count[i];
-    const int c = best_i[i];
-    if (c >= 0) {
-      const size_t cz = size_t(c);
-      h.hit = true;
-      h.position = k::kv3(xb[i], yb[i], wk.pz[cz]);
-      h.normal = k::kv3(wk.nx[cz], wk.ny[cz], wk.nz[cz]);
-      h.tangent = k::kv3(wk.tx[cz], wk.ty[cz], wk.tz[cz]);
-      h.row = wk.row[cz];
-      h.col = wk.col[cz];
-      const k::KRow rw = k::knit_row(g, h.row);
-      const int ci = k::k_modi(h.col, g.cols);
-      h.stitch = codes[rw.off + ci];
-      h.color = colors[rw.off + ci];
-    }
-    out[i] = h;
+    const int o = best_i[i];
+    if (o < 0) continue;
+    const size_t oz = size_t(o);
+    h.hit = true;
+    h.position = k::kv3(xb[i], yb[i], wk.o_pz[oz]);
+    h.normal = k::kv3(wk.o_nx[oz], wk.o_ny[oz], wk.o_nz[oz]);
+    h.tangent = k::kv3(wk.o_tx[oz], wk.o_ty[oz], wk.o_tz[oz]);
+    h.row = best_row[i];
+    h.col = wk.o_col[oz];
+    const int at = (g.rows - 1 - k::k_modi(h.row, g.rows)) * g.cols + k::k_modi(h.col, g.cols);
+    h.stitch = codes[at];
+    h.color = colors[at];
   }
 }
 
@@ -700,8 +775,11 @@ void query_avx512(const KnitSurface& surf, const float* x, const float* y, size_
   const size_t ng = size_t(std::floor(2.0f * (rr + g.a) / 0.78539816f)) + 2;
   const size_t cap = size_t(kBlock) * nk * ng + 32;
   static thread_local Work wk;  // reused between calls: no allocation per call
-  for (auto* v : {&wk.pt, &wk.row, &wk.piece, &wk.hit, &wk.col, &wk.live}) if (v->size() < cap) v->assign(cap, 0);
-  for (auto* v : {&wk.t, &wk.s_in, &wk.px, &wk.py, &wk.pz, &wk.nx, &wk.ny, &wk.nz, &wk.tx, &wk.ty, &wk.tz})
+  for (auto* v : {&wk.pt, &wk.row, &wk.piece, &wk.l_cs, &wk.l_k, &wk.l_bits, &wk.o_slot, &wk.o_hit, &wk.o_col,
+                  &wk.pos_of})
+    if (v->size() < cap) v->assign(cap, 0);
+  for (auto* v : {&wk.t, &wk.l_t, &wk.l_x, &wk.l_y, &wk.l_yk, &wk.o_pz, &wk.o_nx, &wk.o_ny, &wk.o_nz, &wk.o_tx,
+                  &wk.o_ty, &wk.o_tz, &wk.o_sin})
     if (v->size() < cap) v->assign(cap, 0.0f);
   for (size_t b = 0; b < n; b += kBlock) {
     const int nb = int(std::min<size_t>(kBlock, n - b));

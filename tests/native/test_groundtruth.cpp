@@ -45,9 +45,22 @@ TEST(GroundTruth, VerticalQueryMatchesExplicitTubes) {
     std::uniform_real_distribution<double> U(0, 1);
     const double r = sc.surface.params().r;
     long n = 0, agree = 0, edge = 0, layers_ok = 0, layers_n = 0;
-    std::vector<double> zerr, nerr, naive_zerr, naive_nerr;
-    for (int i = 0; i < 4000; ++i) {
-      const double x = sc.x0 + (sc.x1 - sc.x0) * U(rng), y = sc.y0 + (sc.y1 - sc.y0) * U(rng);
+    long b_agree = 0, b_layers_ok = 0;  // the same for query_batch (AVX-512 where the CPU has it)
+    std::vector<double> zerr, nerr, naive_zerr, naive_nerr, b_zerr, b_nerr;
+    constexpr int kPoints = 4000;
+    std::vector<double> xs(kPoints), ys(kPoints);
+    std::vector<float> xf(kPoints), yf(kPoints);
+    for (int i = 0; i < kPoints; ++i) {
+      xs[size_t(i)] = sc.x0 + (sc.x1 - sc.x0) * U(rng);
+      ys[size_t(i)] = sc.y0 + (sc.y1 - sc.y0) * U(rng);
+      xf[size_t(i)] = float(xs[size_t(i)]);
+      yf[size_t(i)] = float(ys[size_t(i)]);
+    }
+    std::vector<SurfaceHit> batch(kPoints);
+    sc.surface.query_batch(xf.data(), yf.data(), size_t(kPoints), batch.data());
+    for (int i = 0; i < kPoints; ++i) {
+      const double x = xs[size_t(i)], y = ys[size_t(i)];
+      const SurfaceHit& mb = batch[size_t(i)];
       const D3 o = {x, y, sc.surface.shell_top() + 1}, d = {0, 0, -1};
       const TubeHit gt = sc.tubes.intersect(o, d, 0, 100);
       bool is_edge = false;
@@ -62,6 +75,11 @@ TEST(GroundTruth, VerticalQueryMatchesExplicitTubes) {
         continue;
       }
       if (m.hit == gt.hit) ++agree;
+      if (mb.hit == gt.hit) ++b_agree;
+      if (mb.hit && gt.hit) {
+        b_zerr.push_back(std::abs(mb.position.z - gt.p[2]) / r);
+        b_nerr.push_back(angle_deg({mb.normal.x, mb.normal.y, mb.normal.z}, gt.normal));
+      }
       if (m.hit && gt.hit) {
         zerr.push_back(std::abs(m.position.z - gt.p[2]) / r);
         nerr.push_back(angle_deg({m.normal.x, m.normal.y, m.normal.z}, gt.normal));
@@ -87,9 +105,11 @@ TEST(GroundTruth, VerticalQueryMatchesExplicitTubes) {
         const int fast = k::knit_vertical_layers(sc.surface.geom(), sc.surface.codes(), sc.surface.colors(),
                                                  float(x), float(y));
         if (m.layers == truth && fast == truth) ++layers_ok;
+        if (mb.layers == truth) ++b_layers_ok;
       }
     }
     const double agreement = double(agree) / double(n - edge);
+    const double b_agreement = double(b_agree) / double(n - edge);
     char buf[400];
     std::snprintf(buf, sizeof buf,
                   "vertical %-20s rays %ld edge %ld agree %.3f%% | z/r mean %.5f max %.4f | normal deg mean %.3f "
@@ -104,6 +124,17 @@ TEST(GroundTruth, VerticalQueryMatchesExplicitTubes) {
                   np.name.c_str(), Stats::mean(naive_zerr), Stats::maxv(naive_zerr), Stats::mean(naive_nerr),
                   Stats::pct(naive_nerr, 0.95));
     log_line(buf);
+    std::snprintf(buf, sizeof buf,
+                  "vertical %-20s query_batch (%s): agree %.3f%% | z/r mean %.5f max %.4f | normal deg mean %.3f "
+                  "p95 %.3f max %.2f | layers agree %.1f%%",
+                  np.name.c_str(), sc.surface.batch_uses_simd(KnitSurface::BatchPath::Auto) ? "AVX-512" : "scalar",
+                  100 * b_agreement, Stats::mean(b_zerr), Stats::maxv(b_zerr), Stats::mean(b_nerr),
+                  Stats::pct(b_nerr, 0.95), Stats::maxv(b_nerr), 100.0 * double(b_layers_ok) / double(layers_n));
+    log_line(buf);
+    EXPECT_GE(b_agreement, 0.99) << np.name << " (query_batch)";
+    EXPECT_LE(Stats::mean(b_nerr), 2.0) << np.name << " (query_batch)";
+    EXPECT_LE(Stats::mean(b_zerr), 0.02) << np.name << " (query_batch)";
+    EXPECT_GE(double(b_layers_ok) / double(layers_n), 0.97) << np.name << " (query_batch)";
     EXPECT_GT(Stats::mean(naive_nerr), 4 * Stats::mean(nerr)) << "the right objective must beat the closest point";
     EXPECT_GE(agreement, 0.99) << np.name;
     EXPECT_LE(Stats::mean(nerr), 2.0) << np.name;
