@@ -215,11 +215,11 @@ inline F cubic_newton_v(F a3, F a2, F a1, F a0, F x) {
 // Real roots of a3 x^3 + a2 x^2 + a1 x + a0 (solve_cubic and
 // solve_quadratic, every branch evaluated and the lane's one kept): roots
 // r0..r2 with n of them valid, in ascending order.
-inline void solve_cubic_v(F a3, F a2, F a1, F a0, F& r0, F& r1, F& r2, I& nroots) {
+inline void solve_cubic_v(F a3, F a2, F a1, F a0, M m, F& r0, F& r1, F& r2, I& nroots) {
   const F big = fv(1.0e30f);
   const F scale = vmax(vmax(vabs(a2), vabs(a1)), vabs(a0));
-  const M quad = le(vabs(a3), fv(1.0e-6f) * scale) | eq(a3, fv(0.0f));
-  // cubic branch
+  const M quad = m & (le(vabs(a3), fv(1.0e-6f) * scale) | eq(a3, fv(0.0f)));
+  // cubic branch (each case only when a lane takes it)
   const F a3s = sel(quad, fv(1.0f), a3);
   const F inv3 = fv(1.0f) / a3s;
   const F b = a2 * inv3, c = a1 * inv3, d = a0 * inv3;
@@ -231,45 +231,50 @@ inline void solve_cubic_v(F a3, F a2, F a1, F a0, F& r0, F& r1, F& r2, I& nroots
   const F disc = hq * hq + tp * tp * tp;
   const M one = gt(disc, fv(0.0f));
   const M triple = ~one & eq(tp, fv(0.0f));
-  F A = -sgn1(q) * cbrt_v(vabs(hq) + vsqrt(vmax(disc, fv(0.0f))));
-  const F Bc = sel(ne(A, fv(0.0f)), -tp / sel(ne(A, fv(0.0f)), A, fv(1.0f)), fv(0.0f));
-  const F root1 = A + Bc - b3;
-  const F mm = fv(2.0f) * vsqrt(vmax(-tp, fv(0.0f)));
-  const F den = p * mm;
-  const F phi = acos_v(clampv(fv(3.0f) * q / sel(ne(den, fv(0.0f)), den, fv(1.0f)), fv(-1.0f), fv(1.0f))) *
-                fv(1.0f / 3.0f);
-  F sp, cp;
-  sincos_v(phi, sp, cp);
-  const F hc = fv(-0.5f) * cp, hs = fv(0.86602540378443864676f) * sp;
-  F c0 = sel(one, root1, sel(triple, -b3, mm * cp - b3));
-  F c1 = mm * (hc + hs) - b3;
-  F c2 = mm * (hc - hs) - b3;
-  const M three = ~one & ~triple;
+  const M three = m & ~quad & ~one & ~triple;
+  F c0 = -b3, c1 = big, c2 = big;  // the triple root
+  if (m & ~quad & one) {
+    const F A = -sgn1(q) * cbrt_v(vabs(hq) + vsqrt(vmax(disc, fv(0.0f))));
+    const F Bc = sel(ne(A, fv(0.0f)), -tp / sel(ne(A, fv(0.0f)), A, fv(1.0f)), fv(0.0f));
+    c0 = sel(one, A + Bc - b3, c0);
+  }
+  if (three) {
+    const F mm = fv(2.0f) * vsqrt(vmax(-tp, fv(0.0f)));
+    const F den = p * mm;
+    const F phi = acos_v(clampv(fv(3.0f) * q / sel(ne(den, fv(0.0f)), den, fv(1.0f)), fv(-1.0f), fv(1.0f))) *
+                  fv(1.0f / 3.0f);
+    F sp, cp;
+    sincos_v(phi, sp, cp);
+    const F hc = fv(-0.5f) * cp, hs = fv(0.86602540378443864676f) * sp;
+    c0 = sel(three, mm * cp - b3, c0);
+    c1 = cubic_newton_v(a3s, a2, a1, a0, mm * (hc + hs) - b3);
+    c2 = cubic_newton_v(a3s, a2, a1, a0, mm * (hc - hs) - b3);
+  }
   c0 = cubic_newton_v(a3s, a2, a1, a0, c0);
-  c1 = cubic_newton_v(a3s, a2, a1, a0, c1);
-  c2 = cubic_newton_v(a3s, a2, a1, a0, c2);
-  // quadratic branch: a2 x^2 + a1 x + a0
-  const F qscale = scale;
-  const M qnone = eq(qscale, fv(0.0f));
-  const M lin = le(vabs(a2), fv(1.0e-7f) * qscale);
-  const F qdisc = a1 * a1 - fv(4.0f) * a2 * a0;
-  const F qq = fv(-0.5f) * (a1 + sgn1(a1) * vsqrt(vmax(qdisc, fv(0.0f))));
-  const M qzero = eq(qq, fv(0.0f));
-  const F qr0 = qq / sel(lin, fv(1.0f), a2);
-  const F qr1 = a0 / sel(qzero, fv(1.0f), qq);
-  const F lr = -a0 / sel(eq(a1, fv(0.0f)), fv(1.0f), a1);
-  I nq = sel(qnone, iv(0),
-             sel(lin, sel(eq(a1, fv(0.0f)), iv(0), iv(1)),
-                 sel(lt(qdisc, fv(0.0f)), iv(0), sel(qzero, iv(1), iv(2)))));
-  F q0 = sel(lin, lr, sel(qzero, fv(0.0f), vmin(qr0, qr1)));
-  F q1 = vmax(qr0, qr1);
   // cubic roots sorted (three) or the one
   const F s0 = vmin(vmin(c0, c1), c2), s2 = vmax(vmax(c0, c1), c2);
   const F s1 = vmax(vmin(c0, c1), vmin(vmax(c0, c1), c2));
-  r0 = sel(quad, q0, sel(three, s0, c0));
-  r1 = sel(quad, q1, sel(three, s1, big));
-  r2 = sel(quad, big, sel(three, s2, big));
-  nroots = sel(quad, nq, sel(three, iv(3), iv(1)));
+  r0 = sel(three, s0, c0);
+  r1 = sel(three, s1, big);
+  r2 = sel(three, s2, big);
+  nroots = sel(three, iv(3), iv(1));
+  if (quad) {  // a2 x^2 + a1 x + a0 (solve_quadratic)
+    const M qnone = eq(scale, fv(0.0f));
+    const M lin = le(vabs(a2), fv(1.0e-7f) * scale);
+    const F qdisc = a1 * a1 - fv(4.0f) * a2 * a0;
+    const F qq = fv(-0.5f) * (a1 + sgn1(a1) * vsqrt(vmax(qdisc, fv(0.0f))));
+    const M qzero = eq(qq, fv(0.0f));
+    const F qr0 = qq / sel(lin, fv(1.0f), a2);
+    const F qr1 = a0 / sel(qzero, fv(1.0f), qq);
+    const F lr = -a0 / sel(eq(a1, fv(0.0f)), fv(1.0f), a1);
+    const I nq = sel(qnone, iv(0),
+                     sel(lin, sel(eq(a1, fv(0.0f)), iv(0), iv(1)),
+                         sel(lt(qdisc, fv(0.0f)), iv(0), sel(qzero, iv(1), iv(2)))));
+    r0 = sel(quad, sel(lin, lr, sel(qzero, fv(0.0f), vmin(qr0, qr1))), r0);
+    r1 = sel(quad, vmax(qr0, qr1), r1);
+    r2 = sel(quad, big, r2);
+    nroots = sel(quad, nq, nroots);
+  }
 }
 
 // Per-surface constants of the batched query (pattern-independent: the
@@ -321,14 +326,13 @@ struct CurveV {
 // Depth polynomial coefficients of a cell from its head, legs and sinker
 // signs packed as bits (1: purl sign): A, B, sl.
 inline void depth_coeffs(I bits, F& A, F& B, F& sl) {
-  const M bh = _mm512_test_epi32_mask(bits.v, _mm512_set1_epi32(1));
-  const M bl = _mm512_test_epi32_mask(bits.v, _mm512_set1_epi32(2));
-  const M bs = _mm512_test_epi32_mask(bits.v, _mm512_set1_epi32(4));
-  const F sh = sel(bh, fv(-1.0f), fv(1.0f));
-  sl = sel(bl, fv(-1.0f), fv(1.0f));
-  const F ss = sel(bs, fv(-1.0f), fv(1.0f));
-  A = fv(0.5f) * (sh + ss) + sl;
-  B = fv(0.5f) * (sh - ss);
+  // by bits 0..7: sh, sl, ss = 1 - 2 bit, A = (sh + ss) / 2 + sl, B = (sh - ss) / 2
+  const F tA = {_mm512_setr_ps(2, 1, 0, -1, 1, 0, -1, -2, 0, 0, 0, 0, 0, 0, 0, 0)};
+  const F tB = {_mm512_setr_ps(0, -1, 0, -1, 1, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0)};
+  const F tL = {_mm512_setr_ps(1, 1, -1, -1, 1, 1, -1, -1, 0, 0, 0, 0, 0, 0, 0, 0)};
+  A = lookup(tA, bits);
+  B = lookup(tB, bits);
+  sl = lookup(tL, bits);
 }
 
 struct Work {
@@ -348,42 +352,33 @@ struct Work {
 };
 
 
-// Depth-sign bits of the cell at pattern-row offsets (off, up, dn) and
-// column index ci (all lanes' cells are knit or purl): bit 0 head (the cell
-// above), bit 1 legs (the cell itself), bit 2 sinker (the cell below); set
-// for a purl sign.
-inline I cell_bits(const int32_t* codes, I off, I up, I dn, I ci, M m) {
-  const I one = iv(1);
-  const I ch = gather(codes, up + ci, m), cl = gather(codes, off + ci, m), cs = gather(codes, dn + ci, m);
-  return sel(ieq(ch, one), iv(1), iv(0)) + sel(ieq(cl, one), iv(2), iv(0)) + sel(ieq(cs, one), iv(4), iv(0));
-}
-
-// Row offsets into codes[] of rows k, k + 1, k - 1 (knit_row).
-inline void row_offsets(const k::KnitGeom& g, I k, I& off, I& up, I& dn) {
-  const I rm1 = iv(g.rows - 1), cols = iv(g.cols);
-  off = (rm1 - modi(k, g.rows)) * cols;
-  up = (rm1 - modi(k + iv(1), g.rows)) * cols;
-  dn = (rm1 - modi(k - iv(1), g.rows)) * cols;
+// KnitSurface::span_bits at cell index idx (9 bits: the depth signs of
+// the cells left of, at and right of it), for the lanes of m. The table
+// holds 16-bit entries: a 32-bit gather at byte offset 2 idx, masked (the
+// table ends with a padding entry).
+inline I span_bits_at(const uint16_t* span, I idx, M m) {
+  const __m512i raw =
+      _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), m, idx.v, reinterpret_cast<const int*>(span), 2);
+  return I{_mm512_and_si512(raw, _mm512_set1_epi32(0x1FF))};
 }
 
 // A chunk of candidates in stage 3: each lane's row, span (the cells
 // around the piece's column cs) and point.
 struct SpanV {
   I cs, k;
-  I bl, bm, br;  // depth bits of columns cs - 1, cs, cs + 1
+  I bits;  // span bits of column cs (KnitSurface::span_bits): cs - 1, cs, cs + 1
   F yk, X, Y;
 };
 
 // Depth bits of column c for each lane: from the span when c is within a
 // column of cs, looked up otherwise (rare: a search that left the span).
-inline I bits_of(const k::KnitGeom& g, const int32_t* codes, const SpanV& sp, I c, M m) {
+inline I bits_of(const k::KnitGeom& g, const uint16_t* span, const SpanV& sp, I c, M m) {
   const I d = c - sp.cs;
-  I b = sel(ilt(d, iv(0)), sp.bl, sel(igt(d, iv(0)), sp.br, sp.bm));
+  I b = I{_mm512_srlv_epi32(sp.bits.v, (d * iv(3) + iv(3)).v)} & iv(7);
   const M far = m & (ilt(d, iv(-1)) | igt(d, iv(1)));
   if (far) {
-    I off, up, dn;
-    row_offsets(g, sp.k, off, up, dn);
-    b = sel(far, cell_bits(codes, off, up, dn, modi(c, g.cols), far), b);
+    const I off = (iv(g.rows - 1) - modi(sp.k, g.rows)) * iv(g.cols);
+    b = sel(far, I{_mm512_srli_epi32(span_bits_at(span, off + modi(c, g.cols), far).v, 3)} & iv(7), b);
   }
   return b;
 }
@@ -392,15 +387,15 @@ inline I bits_of(const k::KnitGeom& g, const int32_t* codes, const SpanV& sp, I 
 // y (knit_span_curve_at for knit and purl cells: the profile of t's column,
 // blended with its neighbour's near their boundary; x and y do not depend
 // on the cells, so the neighbour's profile shares sin and cos).
-inline CurveV curve_at(const k::KnitGeom& g, const int32_t* codes, const SpanV& sp, F t, M m) {
+inline CurveV curve_at(const k::KnitGeom& g, const uint16_t* span, const SpanV& sp, F t, M m) {
   const F two_pi = fv(6.28318530717958647692f), pi = fv(3.14159265358979323846f), pi4 = fv(0.78539816339744830962f);
   const I c = ifloor(t * fv(0.15915494309189533577f));
   const F tc = two_pi * tof(c) + pi;
   const F tau = t - tc;
   const I side = sel(gt(tau, pi - pi4), iv(1), sel(lt(tau, pi4 - pi), iv(-1), iv(0)));
   const I nc = c + side;
-  const I bself = bits_of(g, codes, sp, c, m);
-  const I bnb = bits_of(g, codes, sp, nc, m & ~ieq(side, iv(0)));
+  const I bself = bits_of(g, span, sp, c, m);
+  const I bnb = bits_of(g, span, sp, nc, m & ~ieq(side, iv(0)));
   F s1, c1;
   sincos_v(tau, s1, c1);
   const F s2 = fv(2.0f) * s1 * c1, c2 = c1 * c1 - s1 * s1;
@@ -412,15 +407,23 @@ inline CurveV curve_at(const k::KnitGeom& g, const int32_t* codes, const SpanV& 
   cv.d1y = -h * s1;
   cv.d2x = fv(-4.0f) * a * s2;
   cv.d2y = -h * c1;
-  F A, B, sl, An, Bn, sln;
+  F A, B, sl;
   depth_coeffs(bself, A, B, sl);
-  depth_coeffs(sel(ieq(side, iv(0)), bself, bnb), An, Bn, sln);
   const F c1s = c1 * c1;
   const F P = (A + B * c1) * c1s - sl, P1 = (fv(2.0f) * A + fv(3.0f) * B * c1) * c1,
           P2 = fv(2.0f) * A + fv(6.0f) * B * c1;
+  const F zs = d * P, z1s = -d * P1 * s1, z2s = d * (P2 * s1 * s1 - P1 * c1);
+  const M blend = m & ~ieq(side, iv(0)) & ~ieq(bnb, bself);
+  if (!blend) {  // no lane near a boundary with a cell of other signs: its own profile
+    cv.z = zs;
+    cv.z1 = z1s;
+    cv.z2 = z2s;
+    return cv;
+  }
+  F An, Bn, sln;
+  depth_coeffs(sel(ieq(side, iv(0)), bself, bnb), An, Bn, sln);
   const F Pn = (An + Bn * c1) * c1s - sln, P1n = (fv(2.0f) * An + fv(3.0f) * Bn * c1) * c1,
           P2n = fv(2.0f) * An + fv(6.0f) * Bn * c1;
-  const F zs = d * P, z1s = -d * P1 * s1, z2s = d * (P2 * s1 * s1 - P1 * c1);
   const F zn = d * Pn, z1n = -d * P1n * s1, z2n = d * (P2n * s1 * s1 - P1n * c1);
   const M self_lo = igt(nc, c);  // the neighbour is on the right: self is left of the boundary
   const F zlo = sel(self_lo, zs, zn), z1lo = sel(self_lo, z1s, z1n), z2lo = sel(self_lo, z2s, z2n);
@@ -466,6 +469,7 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
   const k::KnitGeom& g = surf.geom();
   const int32_t* codes = surf.codes();
   const int32_t* colors = surf.colors();
+  const uint16_t* span = surf.span_bits().data();
   const float rr_s = g.r * 1.001f + 1.0e-4f;
   const float m_s = g.r + g.quad_margin;
   const float r2_s = g.r * g.r;
@@ -542,7 +546,7 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
     F r0, r1, r2;
     I nr;
     solve_cubic_v(fv(2.0f) * (Cx * Cx + Cy * Cy), fv(3.0f) * (Bx * Cx + By * Cy),
-                  (Bx * Bx + By * By) + fv(2.0f) * (Ax * Cx + Ay * Cy), Ax * Bx + Ay * By, r0, r1, r2, nr);
+                  (Bx * Bx + By * By) + fv(2.0f) * (Ax * Cx + Ay * Cy), Ax * Bx + Ay * By, m, r0, r1, r2, nr);
     F best = Ax * Ax + Ay * Ay, bu = fv(0.0f);
     {
       const F ex = Ax + Bx + Cx, ey = Ay + By + Cy;
@@ -571,15 +575,9 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
     store(wk.t.data() + c0, sel(near, t, fv(kBig)));
     if (!near) continue;
     // the live ones, with what stage 3 needs of them
-    I off, up, dn;
-    row_offsets(g, kk, off, up, dn);
     const I cs = {_mm512_srai_epi32(gp.v, 3)};
-    const I cm = modi(cs, g.cols);
-    const I cl = sel(ieq(cm, iv(0)), iv(g.cols - 1), cm - iv(1));
-    const I cr = sel(ieq(cm, iv(g.cols - 1)), iv(0), cm + iv(1));
-    const I bits = cell_bits(codes, off, up, dn, cl, near) +
-                   I{_mm512_slli_epi32(cell_bits(codes, off, up, dn, cm, near).v, 3)} +
-                   I{_mm512_slli_epi32(cell_bits(codes, off, up, dn, cr, near).v, 6)};
+    const I off = (iv(g.rows - 1) - modi(kk, g.rows)) * iv(g.cols);
+    const I bits = span_bits_at(span, off + modi(cs, g.cols), near);
     compress_store(wk.l_t.data() + nlive, near, t);
     compress_store(wk.l_x.data() + nlive, near, X);
     compress_store(wk.l_y.data() + nlive, near, Y);
@@ -602,7 +600,7 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
     I phase = iv(kIdle), slot = iv(-1), it = iv(0), tries = iv(0);
     F t = fv(0.0f), f = fv(0.0f), step = fv(0.0f), rho2 = fv(0.0f);
     CurveV cv{fv(0.0f), fv(0.0f), fv(0.0f), fv(0.0f), fv(0.0f), fv(0.0f), fv(0.0f), fv(0.0f), fv(0.0f)};
-    SpanV sp{iv(0), iv(0), iv(0), iv(0), iv(0), fv(0.0f), fv(0.0f), fv(0.0f)};
+    SpanV sp{iv(0), iv(0), iv(0), fv(0.0f), fv(0.0f), fv(0.0f)};
     int next = 0;
     for (;;) {
       // refill idle lanes, in live order
@@ -622,10 +620,7 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
         sp.yk = ex_f(wk.l_yk, sp.yk);
         sp.cs = ex_i(wk.l_cs, sp.cs);
         sp.k = ex_i(wk.l_k, sp.k);
-        const I bits = ex_i(wk.l_bits, iv(0));
-        sp.bl = sel(nw, bits & iv(7), sp.bl);
-        sp.bm = sel(nw, I{_mm512_srli_epi32(bits.v, 3)} & iv(7), sp.bm);
-        sp.br = sel(nw, I{_mm512_srli_epi32(bits.v, 6)} & iv(7), sp.br);
+        sp.bits = ex_i(wk.l_bits, sp.bits);
         slot = I{_mm512_mask_expand_epi32(slot.v, nw, (lane_ix + iv(next)).v)};
         phase = sel(nw, iv(kInit), phase);
         it = sel(nw, iv(0), it);
@@ -663,7 +658,7 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
       const M ev = init | trial;
       if (ev) {
         const F tn = sel(trial, t + step, t);
-        const CurveV nc = curve_at(g, codes, sp, tn, ev);
+        const CurveV nc = curve_at(g, span, sp, tn, ev);
         const F nrho2 = nc.qx * nc.qx + nc.qy * nc.qy;
         const M inside = lt(nrho2, r2);
         const M ok = (init & inside) |
@@ -804,7 +799,7 @@ bool KnitSurface::batch_simd_available() {
 
 bool KnitSurface::batch_uses_simd(BatchPath path) const {
   if (path == BatchPath::Scalar) return false;
-  const bool ok = batch_simd_available() && geom_.has_floats == 0;
+  const bool ok = batch_simd_available() && geom_.has_floats == 0 && !span_bits_.empty();
   if (path == BatchPath::Simd && !ok)
     throw std::invalid_argument(batch_simd_available()
                                     ? "query_batch: the SIMD path takes knit and purl stitches only (this "

@@ -138,11 +138,17 @@ class KnitSurface {
   const k::KnitGeom& geom() const { return geom_; }
   const int32_t* codes() const { return pattern_.codes().data(); }
   const int32_t* colors() const { return pattern_.colors_or_zero().data(); }
+  // query_batch's view of a knit-and-purl pattern, one entry per cell (in
+  // codes() order): the depth-sign bits (head, legs, sinker; set for purl)
+  // of the cells left of, at and right of it, 3 bits each, plus one entry
+  // of padding. Empty for patterns with slip stitches.
+  const std::vector<uint16_t>& span_bits() const { return span_bits_; }
 
  private:
   Pattern pattern_;
   StitchParams params_;
   k::KnitGeom geom_;
+  std::vector<uint16_t> span_bits_;
 };
 
 }  // namespace knit
