@@ -346,8 +346,11 @@ struct Work {
   std::vector<float> l_t, l_x, l_y, l_yk;
   std::vector<int32_t> l_cs, l_k, l_bits;
   // stage 3: entries, in the order the lanes finish them, with their live slot
-  std::vector<int32_t> o_slot, o_hit, o_col;
-  std::vector<float> o_pz, o_nx, o_ny, o_nz, o_tx, o_ty, o_tz, o_sin;
+  std::vector<int32_t> o_slot, o_hit;
+  std::vector<float> o_sin, o_t;
+  // stage 5: the entry each point keeps (by point, in point order)
+  std::vector<int32_t> b_pt, b_o, b_col;
+  std::vector<float> b_pz, b_nx, b_ny, b_nz, b_tx, b_ty, b_tz;
   std::vector<int32_t> pos_of;  // live slot -> index in the o_ arrays
 };
 
@@ -684,26 +687,13 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
         fin_hit |= gave_up;
       }
       if (fin) {
-        const F w = vsqrt(vmax(r2 - rho2, fv(0.0f)));
-        const F s_in = (top - cv.z) - w;
-        const F pz = top - s_in;
-        const F nzv = pz - cv.z;  // normal: (p - Y(t)) / |.|, tangent: Y'(t) / |.|
-        const F nl = vsqrt(cv.qx * cv.qx + cv.qy * cv.qy + nzv * nzv);
-        const F nli = fv(1.0f) / sel(gt(nl, fv(0.0f)), nl, fv(1.0f));
-        const F tl = vsqrt(cv.d1x * cv.d1x + cv.d1y * cv.d1y + cv.z1 * cv.z1);
-        const F tli = fv(1.0f) / sel(gt(tl, fv(0.0f)), tl, fv(1.0f));
-        const I col = ifloor(t * fv(0.15915494309189533577f));
+        // the entry distance orders the crossings; the point, normal and
+        // tangent are only needed for each point's first one (stage 5)
+        const F s_in = (top - cv.z) - vsqrt(vmax(r2 - rho2, fv(0.0f)));
         compress_store(wk.o_slot.data() + nout, fin, slot);
         compress_store(wk.o_hit.data() + nout, fin, sel(fin_hit, iv(1), iv(0)));
-        compress_store(wk.o_col.data() + nout, fin, col);
         compress_store(wk.o_sin.data() + nout, fin, s_in);
-        compress_store(wk.o_pz.data() + nout, fin, pz);
-        compress_store(wk.o_nx.data() + nout, fin, -cv.qx * nli);
-        compress_store(wk.o_ny.data() + nout, fin, -cv.qy * nli);
-        compress_store(wk.o_nz.data() + nout, fin, nzv * nli);
-        compress_store(wk.o_tx.data() + nout, fin, cv.d1x * tli);
-        compress_store(wk.o_ty.data() + nout, fin, cv.d1y * tli);
-        compress_store(wk.o_tz.data() + nout, fin, cv.z1 * tli);
+        compress_store(wk.o_t.data() + nout, fin, t);
         nout += __builtin_popcount(unsigned(fin));
         phase = sel(fin, iv(kIdle), phase);
       }
@@ -743,22 +733,66 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
       best_row[p] = wk.row[size_t(c)];
     }
   }
+  // Stage 5: each point's first entry, evaluated again at its final t (the
+  // same curve point the search ended on): position, normal, tangent, cell.
+  int nb = 0;
   for (int i = 0; i < n; ++i) {
-    SurfaceHit& h = out[i];
-    h = SurfaceHit{};
-    h.layers = count[i];
-    const int o = best_i[i];
-    if (o < 0) continue;
-    const size_t oz = size_t(o);
+    if (best_i[i] < 0) {
+      SurfaceHit h;
+      h.layers = count[i];
+      out[i] = h;
+      continue;
+    }
+    wk.b_pt[size_t(nb)] = i;
+    wk.b_o[size_t(nb)] = best_i[i];
+    ++nb;
+  }
+  for (int c0 = 0; c0 < nb; c0 += 16) {
+    const M m = M((nb - c0 >= 16) ? 0xFFFF : ((1u << (nb - c0)) - 1u));
+    const I o = {_mm512_maskz_loadu_epi32(m, wk.b_o.data() + c0)};
+    const I sl = gather(wk.o_slot.data(), o, m);
+    const F t = gather(wk.o_t.data(), o, m);
+    SpanV sp;
+    sp.X = gather(wk.l_x.data(), sl, m);
+    sp.Y = gather(wk.l_y.data(), sl, m);
+    sp.yk = gather(wk.l_yk.data(), sl, m);
+    sp.cs = gather(wk.l_cs.data(), sl, m);
+    sp.k = gather(wk.l_k.data(), sl, m);
+    sp.bits = gather(wk.l_bits.data(), sl, m);
+    const CurveV cv = curve_at(g, span, sp, t, m);
+    const F rho2 = cv.qx * cv.qx + cv.qy * cv.qy;
+    const F w = vsqrt(vmax(r2 - rho2, fv(0.0f)));
+    const F s_in = (top - cv.z) - w;
+    const F pz = top - s_in;
+    const F nzv = pz - cv.z;  // normal: (p - Y(t)) / |.|, tangent: Y'(t) / |.|
+    const F nl = vsqrt(cv.qx * cv.qx + cv.qy * cv.qy + nzv * nzv);
+    const F nli = fv(1.0f) / sel(gt(nl, fv(0.0f)), nl, fv(1.0f));
+    const F tl = vsqrt(cv.d1x * cv.d1x + cv.d1y * cv.d1y + cv.z1 * cv.z1);
+    const F tli = fv(1.0f) / sel(gt(tl, fv(0.0f)), tl, fv(1.0f));
+    store(wk.b_col.data() + c0, ifloor(t * fv(0.15915494309189533577f)));
+    store(wk.b_pz.data() + c0, pz);
+    store(wk.b_nx.data() + c0, -cv.qx * nli);
+    store(wk.b_ny.data() + c0, -cv.qy * nli);
+    store(wk.b_nz.data() + c0, nzv * nli);
+    store(wk.b_tx.data() + c0, cv.d1x * tli);
+    store(wk.b_ty.data() + c0, cv.d1y * tli);
+    store(wk.b_tz.data() + c0, cv.z1 * tli);
+  }
+  for (int b = 0; b < nb; ++b) {
+    const size_t bz = size_t(b);
+    const int i = wk.b_pt[bz];
+    SurfaceHit h;
     h.hit = true;
-    h.position = k::kv3(xb[i], yb[i], wk.o_pz[oz]);
-    h.normal = k::kv3(wk.o_nx[oz], wk.o_ny[oz], wk.o_nz[oz]);
-    h.tangent = k::kv3(wk.o_tx[oz], wk.o_ty[oz], wk.o_tz[oz]);
+    h.layers = count[i];
+    h.position = k::kv3(xb[i], yb[i], wk.b_pz[bz]);
+    h.normal = k::kv3(wk.b_nx[bz], wk.b_ny[bz], wk.b_nz[bz]);
+    h.tangent = k::kv3(wk.b_tx[bz], wk.b_ty[bz], wk.b_tz[bz]);
     h.row = best_row[i];
-    h.col = wk.o_col[oz];
+    h.col = wk.b_col[bz];
     const int at = (g.rows - 1 - k::k_modi(h.row, g.rows)) * g.cols + k::k_modi(h.col, g.cols);
     h.stitch = codes[at];
     h.color = colors[at];
+    out[i] = h;
   }
 }
 
@@ -770,11 +804,11 @@ void query_avx512(const KnitSurface& surf, const float* x, const float* y, size_
   const size_t ng = size_t(std::floor(2.0f * (rr + g.a) / 0.78539816f)) + 2;
   const size_t cap = size_t(kBlock) * nk * ng + 32;
   static thread_local Work wk;  // reused between calls: no allocation per call
-  for (auto* v : {&wk.pt, &wk.row, &wk.piece, &wk.l_cs, &wk.l_k, &wk.l_bits, &wk.o_slot, &wk.o_hit, &wk.o_col,
-                  &wk.pos_of})
+  for (auto* v : {&wk.pt, &wk.row, &wk.piece, &wk.l_cs, &wk.l_k, &wk.l_bits, &wk.o_slot, &wk.o_hit, &wk.pos_of,
+                  &wk.b_pt, &wk.b_o, &wk.b_col})
     if (v->size() < cap) v->assign(cap, 0);
-  for (auto* v : {&wk.t, &wk.l_t, &wk.l_x, &wk.l_y, &wk.l_yk, &wk.o_pz, &wk.o_nx, &wk.o_ny, &wk.o_nz, &wk.o_tx,
-                  &wk.o_ty, &wk.o_tz, &wk.o_sin})
+  for (auto* v : {&wk.t, &wk.l_t, &wk.l_x, &wk.l_y, &wk.l_yk, &wk.o_sin, &wk.o_t, &wk.b_pz, &wk.b_nx, &wk.b_ny,
+                  &wk.b_nz, &wk.b_tx, &wk.b_ty, &wk.b_tz})
     if (v->size() < cap) v->assign(cap, 0.0f);
   for (size_t b = 0; b < n; b += kBlock) {
     const int nb = int(std::min<size_t>(kBlock, n - b));
