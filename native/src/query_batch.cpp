@@ -349,9 +349,21 @@ struct Work {
   std::vector<int32_t> o_slot, o_hit;
   std::vector<float> o_sin, o_t;
   // stage 5: the entry each point keeps (by point, in point order)
-  std::vector<int32_t> b_pt, b_o, b_col;
+  std::vector<int32_t> b_pt, b_o, b_row, b_col, b_code, b_colour;
   std::vector<float> b_pz, b_nx, b_ny, b_nz, b_tx, b_ty, b_tz;
   std::vector<int32_t> pos_of;  // live slot -> index in the o_ arrays
+
+  // Room for `need` candidates (and slack for the full-width stores and
+  // loads past the end) in every array, keeping what is there.
+  void reserve(size_t need) {
+    const size_t cap = need + 32;
+    if (pt.size() >= cap) return;
+    for (auto* v : {&pt, &row, &piece, &l_cs, &l_k, &l_bits, &o_slot, &o_hit, &pos_of, &b_pt, &b_o, &b_row, &b_col,
+                    &b_code, &b_colour})
+      v->resize(2 * cap, 0);
+    for (auto* v : {&t, &l_t, &l_x, &l_y, &l_yk, &o_sin, &o_t, &b_pz, &b_nx, &b_ny, &b_nz, &b_tx, &b_ty, &b_tz})
+      v->resize(2 * cap, 0.0f);
+  }
 };
 
 
@@ -497,6 +509,7 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
     const I g1 = ifloor(((X + rr) + fv(g.a)) / pi4);
     const int nk = _mm512_mask_reduce_max_epi32(vm, (k1 - k0).v) + 1;
     const int ng = _mm512_mask_reduce_max_epi32(vm, (g1 - g0).v) + 1;
+    wk.reserve(size_t(ncand) + 16 * size_t(nk) * size_t(ng));  // (no pointer into wk is held across this)
     const I lane_id = {_mm512_add_epi32(_mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0),
                                         _mm512_set1_epi32(base))};
     for (int dk = 0; dk < nk; ++dk) {
@@ -745,6 +758,7 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
     }
     wk.b_pt[size_t(nb)] = i;
     wk.b_o[size_t(nb)] = best_i[i];
+    wk.b_row[size_t(nb)] = best_row[i];
     ++nb;
   }
   for (int c0 = 0; c0 < nb; c0 += 16) {
@@ -769,7 +783,12 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
     const F nli = fv(1.0f) / sel(gt(nl, fv(0.0f)), nl, fv(1.0f));
     const F tl = vsqrt(cv.d1x * cv.d1x + cv.d1y * cv.d1y + cv.z1 * cv.z1);
     const F tli = fv(1.0f) / sel(gt(tl, fv(0.0f)), tl, fv(1.0f));
-    store(wk.b_col.data() + c0, ifloor(t * fv(0.15915494309189533577f)));
+    const I col = ifloor(t * fv(0.15915494309189533577f));
+    const I row = {_mm512_maskz_loadu_epi32(m, wk.b_row.data() + c0)};
+    const I at = (iv(g.rows - 1) - modi(row, g.rows)) * iv(g.cols) + modi(col, g.cols);
+    store(wk.b_col.data() + c0, col);
+    store(wk.b_code.data() + c0, gather(codes, at, m));
+    store(wk.b_colour.data() + c0, gather(colors, at, m));
     store(wk.b_pz.data() + c0, pz);
     store(wk.b_nx.data() + c0, -cv.qx * nli);
     store(wk.b_ny.data() + c0, -cv.qy * nli);
@@ -787,11 +806,10 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
     h.position = k::kv3(xb[i], yb[i], wk.b_pz[bz]);
     h.normal = k::kv3(wk.b_nx[bz], wk.b_ny[bz], wk.b_nz[bz]);
     h.tangent = k::kv3(wk.b_tx[bz], wk.b_ty[bz], wk.b_tz[bz]);
-    h.row = best_row[i];
+    h.row = wk.b_row[bz];
     h.col = wk.b_col[bz];
-    const int at = (g.rows - 1 - k::k_modi(h.row, g.rows)) * g.cols + k::k_modi(h.col, g.cols);
-    h.stitch = codes[at];
-    h.color = colors[at];
+    h.stitch = wk.b_code[bz];
+    h.color = wk.b_colour[bz];
     out[i] = h;
   }
 }
@@ -799,17 +817,10 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
 void query_avx512(const KnitSurface& surf, const float* x, const float* y, size_t n, SurfaceHit* out) {
   const k::KnitGeom& g = surf.geom();
   const BatchConsts kc = make_consts(g);
-  const float rr = g.r * 1.001f + 1.0e-4f;
-  const size_t nk = size_t(std::floor(2.0f * (g.h + rr) / g.row_spacing)) + 2;
-  const size_t ng = size_t(std::floor(2.0f * (rr + g.a) / 0.78539816f)) + 2;
-  const size_t cap = size_t(kBlock) * nk * ng + 32;
-  static thread_local Work wk;  // reused between calls: no allocation per call
-  for (auto* v : {&wk.pt, &wk.row, &wk.piece, &wk.l_cs, &wk.l_k, &wk.l_bits, &wk.o_slot, &wk.o_hit, &wk.pos_of,
-                  &wk.b_pt, &wk.b_o, &wk.b_col})
-    if (v->size() < cap) v->assign(cap, 0);
-  for (auto* v : {&wk.t, &wk.l_t, &wk.l_x, &wk.l_y, &wk.l_yk, &wk.o_sin, &wk.o_t, &wk.b_pz, &wk.b_nx, &wk.b_ny,
-                  &wk.b_nz, &wk.b_tx, &wk.b_ty, &wk.b_tz})
-    if (v->size() < cap) v->assign(cap, 0.0f);
+  // Reused between calls (no allocation per call once grown); stage 1
+  // grows it when a vector of points could overflow it.
+  static thread_local Work wk;
+  wk.reserve(size_t(kBlock) * 24);
   for (size_t b = 0; b < n; b += kBlock) {
     const int nb = int(std::min<size_t>(kBlock, n - b));
     query_block_avx512(surf, kc, x + b, y + b, nb, out + b, wk);

@@ -139,18 +139,41 @@ TEST(QueryBatch, SlipStitchesAndTheScalarChoiceTakeTheKernel) {
 TEST(QueryBatch, OddInputsGiveWhatQueryGives) {
   const KnitSurface s(test::rib_1x1(), StitchParams{});
   const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
-  std::vector<float> x = {nan, 1.0f, inf, -inf, 2.0e7f, 3.0f, 1.0e6f, 0.0f};
-  std::vector<float> y = {1.0f, nan, 1.0f, 1.0f, 1.0f, -2.0e7f, 2.0f, 0.0f};
+  // NaN, infinities and points beyond the kernel's coordinate range
+  // (KNIT_MAX_COORD, 1e7): misses, as query() gives them
+  std::vector<float> x = {nan, 1.0f, inf, -inf, 2.0e7f, 3.0f, 0.5f};
+  std::vector<float> y = {1.0f, nan, 1.0f, 1.0f, 1.0f, -2.0e7f, 0.0f};
+  // then a block of points just inside that range, where the row and piece
+  // windows are widest in float. Pattern space is meaningless there (1
+  // unit between floats, the hosts stop at kMaxPatternCoord = 32768) and
+  // the two paths round differently; what is asserted is that the batch
+  // stays within its buffers and returns finite, unit-length results.
+  for (int i = 0; i < 300; ++i) {
+    x.push_back(9.99e6f - 0.37f * float(i));
+    y.push_back(-9.99e6f + 0.53f * float(i));
+  }
   std::vector<SurfaceHit> b(x.size());
   s.query_batch(x.data(), y.data(), x.size(), b.data());
-  for (size_t i = 0; i < x.size(); ++i) {
+  for (size_t i = 0; i < 7; ++i) {
     const SurfaceHit a = s.query(x[i], y[i]);
     EXPECT_EQ(a.hit, b[i].hit) << i;
     EXPECT_EQ(a.layers, b[i].layers) << i;
     if (a.hit && b[i].hit) EXPECT_NEAR(a.position.z, b[i].position.z, 0.02f * s.params().r) << i;
   }
-  EXPECT_FALSE(b[0].hit);
-  EXPECT_FALSE(b[4].hit);
+  for (size_t i = 0; i < 6; ++i) EXPECT_FALSE(b[i].hit) << i;
+  EXPECT_TRUE(b[6].hit);
+  int far_hits = 0;
+  for (size_t i = 7; i < x.size(); ++i) {
+    if (!b[i].hit) continue;
+    ++far_hits;
+    const SurfaceHit& h = b[i];
+    EXPECT_TRUE(std::isfinite(h.position.z) && std::abs(h.position.z) <= s.shell_top()) << i;
+    EXPECT_NEAR(std::sqrt(h.normal.x * h.normal.x + h.normal.y * h.normal.y + h.normal.z * h.normal.z), 1.0f, 1e-4f);
+    EXPECT_NEAR(std::sqrt(h.tangent.x * h.tangent.x + h.tangent.y * h.tangent.y + h.tangent.z * h.tangent.z), 1.0f,
+                1e-4f);
+    EXPECT_GE(h.layers, 1);
+  }
+  EXPECT_GT(far_hits, 30);  // (68 of the 300: the points fall on a 1-unit grid there)
   s.query_batch(x.data(), y.data(), 0, nullptr);  // nothing to do
   EXPECT_THROW(s.query_batch(nullptr, y.data(), 1, b.data()), std::invalid_argument);
 }
