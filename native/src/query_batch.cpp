@@ -45,25 +45,8 @@ namespace knit {
 
 namespace {
 
-SurfaceHit hit_from(const k::KnitLineHit& h) {
-  SurfaceHit s;
-  s.hit = h.hit != 0;
-  if (s.hit) {
-    s.position = h.p;
-    s.normal = h.n;
-    s.tangent = h.tangent;
-    s.row = h.row;
-    s.col = h.col;
-    s.stitch = h.code;
-    s.color = h.colour;
-  }
-  s.layers = h.crossings;
-  return s;
-}
-
 void query_scalar(const KnitSurface& s, const float* x, const float* y, size_t n, SurfaceHit* out) {
-  for (size_t i = 0; i < n; ++i)
-    out[i] = hit_from(k::knit_vertical_query(s.geom(), s.codes(), s.colors(), x[i], y[i]));
+  for (size_t i = 0; i < n; ++i) out[i] = s.query(x[i], y[i]);
 }
 
 #if KNIT_HAVE_AVX512_PATH
