@@ -12,13 +12,16 @@
 //      Viete, as cubic.h), then one Newton step on the exact curve.
 //   3. entries: the safeguarded Newton search of knit_newton_extreme for the
 //      entry (the maximum of z(t) + sqrt(r^2 - rho(t)^2)) on the exact curve,
-//      depth signs and blends included.
+//      depth signs and blends included. Each lane takes the next candidate
+//      as soon as its search ends (one curve evaluation per lane per round).
 //   4. per point, in row and piece order: the kernel's de-duplication of a
 //      crossing found from two pieces, the layer count and the first entry.
+//   5. each point's first entry evaluated again at its final parameter:
+//      position, normal, tangent and cell.
 // A vertical line's distance to a knit or purl yarn lies in x and y, which
 // do not depend on the codes (stitch.h), so stages 1-2 never read the
-// pattern; stage 3 reads the depth signs of the three cells around the
-// piece once per candidate.
+// pattern; the live candidates take the depth signs of the three cells
+// around their piece from KnitSurface::span_bits, one gather each.
 //
 // The same mathematics as the scalar kernel, evaluated in a different
 // order and with fused multiply-adds: results agree with query() up to float
@@ -52,7 +55,10 @@ void query_scalar(const KnitSurface& s, const float* x, const float* y, size_t n
 #if KNIT_HAVE_AVX512_PATH
 
 bool cpu_has_avx512() {
-  static const bool ok = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq");
+  // (the instruction sets of the target pragma below)
+  static const bool ok = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+                         __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+                         __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2");
   return ok;
 }
 
@@ -179,7 +185,7 @@ inline F cbrt_v(F x) {
   const M pos = gt(ax, fv(1.0e-30f));
   const F axs = sel(pos, ax, fv(1.0f));
   const __m512i bits = _mm512_castps_si512(axs.v);
-  // i / 3 + 709921077 through double-width floats (exact enough for a guess)
+  // i / 3 + 709921077 with the division in float (close enough for a guess)
   const __m512i third = _mm512_cvttps_epi32(_mm512_mul_ps(_mm512_cvtepu32_ps(bits), _mm512_set1_ps(1.0f / 3.0f)));
   F y = {_mm512_castsi512_ps(_mm512_add_epi32(third, _mm512_set1_epi32(709921077)))};
   for (int it = 0; it < 3; ++it) y = y - (y * y * y - axs) / (fv(3.0f) * y * y);
@@ -296,10 +302,8 @@ BatchConsts make_consts(const k::KnitGeom& g) {
           load(q1x), load(q1y), load(q2x), load(q2y)};
 }
 
-// The curve of a row at t with its depth: x relative to the point (qx),
-// y relative to the point (qy), z, and the derivatives. sgA, sgB, sgL: the
-// depth polynomial's A, B and -sl (knit_depth_poly) of the lane's cell and
-// of its blend neighbour.
+// The curve of a lane's row at t: x and y relative to the lane's point
+// (qx, qy), z, and their first and second derivatives in t.
 struct CurveV {
   F qx, qy, z;
   F d1x, d1y, z1;
@@ -348,7 +352,6 @@ struct Work {
       v->resize(2 * cap, 0.0f);
   }
 };
-
 
 // KnitSurface::span_bits at cell index idx (9 bits: the depth signs of
 // the cells left of, at and right of it), for the lanes of m. The table
@@ -461,7 +464,7 @@ inline void curve_xy_at(const k::KnitGeom& g, F t, F yk, F X, F Y, F& qx, F& qy,
 constexpr float kBig = 1.0e30f;
 constexpr int kBlock = 256;  // points per pass through the stages
 
-// Stages 1-4 for points [0, n) of a block (n <= kBlock).
+// Stages 1-5 for points [0, n) of a block (n <= kBlock).
 void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const float* xs, const float* ys, int n,
                         SurfaceHit* out, Work& wk) {
   const k::KnitGeom& g = surf.geom();
