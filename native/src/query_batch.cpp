@@ -462,7 +462,7 @@ inline void curve_xy_at(const k::KnitGeom& g, F t, F yk, F X, F Y, F& qx, F& qy,
 }
 
 constexpr float kBig = 1.0e30f;
-constexpr int kBlock = 256;  // points per pass through the stages
+constexpr int kBlock = 1024;  // points per pass through the stages
 
 // Stages 1-5 for points [0, n) of a block (n <= kBlock).
 void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const float* xs, const float* ys, int n,
@@ -604,7 +604,45 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
     CurveV cv{fv(0.0f), fv(0.0f), fv(0.0f), fv(0.0f), fv(0.0f), fv(0.0f), fv(0.0f), fv(0.0f), fv(0.0f)};
     SpanV sp{iv(0), iv(0), iv(0), fv(0.0f), fv(0.0f), fv(0.0f)};
     int next = 0;
+    M done = 0, done_hit = 0;  // lanes whose search has ended (with a crossing), not yet written
     for (;;) {
+      // lanes with an accepted point: the next Newton step, or done
+      const M st = ieq(phase, iv(kStep));
+      if (st) {
+        const F w = vsqrt(vmax(r2 - rho2, fv(0.0f)));
+        const F iws = fv(1.0f) / sel(gt(w, fv(0.0f)), w, fv(1.0f));
+        const F phi1 = cv.qx * cv.d1x + cv.qy * cv.d1y;
+        const F phi2 = (cv.d1x * cv.d1x + cv.d1y * cv.d1y) + (cv.qx * cv.d2x + cv.qy * cv.d2y);
+        const F f1 = cv.z1 - phi1 * iws;
+        const F f2 = (cv.z2 - phi2 * iws) - phi1 * phi1 * (iws * iws * iws);
+        const M concave = lt(f2, fv(0.0f));
+        F sn = sel(concave, -f1 / sel(concave, f2, fv(-1.0f)), f1 * fv(0.05f));
+        sn = clampv(sn, fv(-0.25f), fv(0.25f));
+        const M stop = st & (ieq(it, iv(5)) | lt(vabs(sn), fv(1.0e-4f)));  // KNIT_NEWTON_EXTREME
+        done |= stop;
+        done_hit |= stop;
+        const M go = st & ~stop;
+        f = sel(go, (cv.z - top) + w, f);
+        step = sel(go, sn, step);
+        it = sel(go, it + iv(1), it);
+        tries = sel(go, iv(0), tries);
+        phase = sel(go, iv(kTrial), phase);
+      }
+      // write the ended searches and free their lanes before the refill, so
+      // that the evaluation below runs on as many lanes as there is work
+      if (done) {
+        // the entry distance orders the crossings; the point, normal and
+        // tangent are only needed for each point's first one (stage 5)
+        const F s_in = (top - cv.z) - vsqrt(vmax(r2 - rho2, fv(0.0f)));
+        compress_store(wk.o_slot.data() + nout, done, slot);
+        compress_store(wk.o_hit.data() + nout, done, sel(done_hit, iv(1), iv(0)));
+        compress_store(wk.o_sin.data() + nout, done, s_in);
+        compress_store(wk.o_t.data() + nout, done, t);
+        nout += __builtin_popcount(unsigned(done));
+        phase = sel(done, iv(kIdle), phase);
+        done = 0;
+        done_hit = 0;
+      }
       // refill idle lanes, in live order
       const M idle = ieq(phase, iv(kIdle));
       const int take = std::min(__builtin_popcount(unsigned(idle)), nlive - next);
@@ -628,74 +666,34 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
         it = sel(nw, iv(0), it);
         next += take;
       }
-      M busy = ~ieq(phase, iv(kIdle));
-      if (!busy) break;
-      M fin = 0, fin_hit = 0;
-      // lanes with an accepted point: the next Newton step, or done
-      {
-        const M st = ieq(phase, iv(kStep));
-        if (st) {
-          const F w = vsqrt(vmax(r2 - rho2, fv(0.0f)));
-          const F iws = fv(1.0f) / sel(gt(w, fv(0.0f)), w, fv(1.0f));
-          const F phi1 = cv.qx * cv.d1x + cv.qy * cv.d1y;
-          const F phi2 = (cv.d1x * cv.d1x + cv.d1y * cv.d1y) + (cv.qx * cv.d2x + cv.qy * cv.d2y);
-          const F f1 = cv.z1 - phi1 * iws;
-          const F f2 = (cv.z2 - phi2 * iws) - phi1 * phi1 * (iws * iws * iws);
-          const M concave = lt(f2, fv(0.0f));
-          F sn = sel(concave, -f1 / sel(concave, f2, fv(-1.0f)), f1 * fv(0.05f));
-          sn = clampv(sn, fv(-0.25f), fv(0.25f));
-          const M done = st & (ieq(it, iv(5)) | lt(vabs(sn), fv(1.0e-4f)));  // KNIT_NEWTON_EXTREME
-          fin |= done;
-          fin_hit |= done;
-          const M go = st & ~done;
-          f = sel(go, (cv.z - top) + w, f);
-          step = sel(go, sn, step);
-          it = sel(go, it + iv(1), it);
-          tries = sel(go, iv(0), tries);
-          phase = sel(go, iv(kTrial), phase);
-        }
-      }
       // one curve evaluation for the lanes at a start or a trial point
       const M init = ieq(phase, iv(kInit)), trial = ieq(phase, iv(kTrial));
       const M ev = init | trial;
-      if (ev) {
-        const F tn = sel(trial, t + step, t);
-        const CurveV nc = curve_at(g, span, sp, tn, ev);
-        const F nrho2 = nc.qx * nc.qx + nc.qy * nc.qy;
-        const M inside = lt(nrho2, r2);
-        const M ok = (init & inside) |
-                     (trial & inside & ge((nc.z - top) + vsqrt(vmax(r2 - nrho2, fv(0.0f))), f));
-        t = sel(ok, tn, t);
-        cv.qx = sel(ok, nc.qx, cv.qx);
-        cv.qy = sel(ok, nc.qy, cv.qy);
-        cv.z = sel(ok, nc.z, cv.z);
-        cv.d1x = sel(ok, nc.d1x, cv.d1x);
-        cv.d1y = sel(ok, nc.d1y, cv.d1y);
-        cv.z1 = sel(ok, nc.z1, cv.z1);
-        cv.d2x = sel(ok, nc.d2x, cv.d2x);
-        cv.d2y = sel(ok, nc.d2y, cv.d2y);
-        cv.z2 = sel(ok, nc.z2, cv.z2);
-        rho2 = sel(ok, nrho2, rho2);
-        phase = sel(ok, iv(kStep), phase);
-        fin |= init & ~inside;  // the start is outside the tube: no crossing
-        const M rej = trial & ~ok;
-        tries = sel(rej, tries + iv(1), tries);
-        step = sel(rej, step * fv(0.5f), step);
-        const M gave_up = rej & ieq(tries, iv(4));
-        fin |= gave_up;
-        fin_hit |= gave_up;
-      }
-      if (fin) {
-        // the entry distance orders the crossings; the point, normal and
-        // tangent are only needed for each point's first one (stage 5)
-        const F s_in = (top - cv.z) - vsqrt(vmax(r2 - rho2, fv(0.0f)));
-        compress_store(wk.o_slot.data() + nout, fin, slot);
-        compress_store(wk.o_hit.data() + nout, fin, sel(fin_hit, iv(1), iv(0)));
-        compress_store(wk.o_sin.data() + nout, fin, s_in);
-        compress_store(wk.o_t.data() + nout, fin, t);
-        nout += __builtin_popcount(unsigned(fin));
-        phase = sel(fin, iv(kIdle), phase);
-      }
+      if (!ev) break;  // (every lane idle: nothing left)
+      const F tn = sel(trial, t + step, t);
+      const CurveV nc = curve_at(g, span, sp, tn, ev);
+      const F nrho2 = nc.qx * nc.qx + nc.qy * nc.qy;
+      const M inside = lt(nrho2, r2);
+      const M ok = (init & inside) | (trial & inside & ge((nc.z - top) + vsqrt(vmax(r2 - nrho2, fv(0.0f))), f));
+      t = sel(ok, tn, t);
+      cv.qx = sel(ok, nc.qx, cv.qx);
+      cv.qy = sel(ok, nc.qy, cv.qy);
+      cv.z = sel(ok, nc.z, cv.z);
+      cv.d1x = sel(ok, nc.d1x, cv.d1x);
+      cv.d1y = sel(ok, nc.d1y, cv.d1y);
+      cv.z1 = sel(ok, nc.z1, cv.z1);
+      cv.d2x = sel(ok, nc.d2x, cv.d2x);
+      cv.d2y = sel(ok, nc.d2y, cv.d2y);
+      cv.z2 = sel(ok, nc.z2, cv.z2);
+      rho2 = sel(ok, nrho2, rho2);
+      phase = sel(ok, iv(kStep), phase);
+      done |= init & ~inside;  // the start is outside the tube: no crossing
+      const M rej = trial & ~ok;
+      tries = sel(rej, tries + iv(1), tries);
+      step = sel(rej, step * fv(0.5f), step);
+      const M gave_up = rej & ieq(tries, iv(4));
+      done |= gave_up;
+      done_hit |= gave_up;
     }
   }
   for (int i = 0; i < nout; ++i) wk.pos_of[size_t(wk.o_slot[size_t(i)])] = i;
