@@ -325,13 +325,16 @@ inline void depth_coeffs(I bits, F& A, F& B, F& sl) {
 struct Work {
   // stage 1: candidates, in row and piece order for each point
   std::vector<int32_t> pt, row, piece;
-  // stage 2: each candidate's closest-point parameter (kBig: none within m)
+  // stage 2: each candidate's closest-point parameter (kBig: none within m),
+  // whether the line passes through the tube there, and (stage 2b) whether
+  // its entry is searched
   std::vector<float> t;
-  // stage 2 -> 3: the live candidates (closest point within m), in
-  // candidate order: parameter, point, row centre, span column, row and
-  // the depth bits of the span's three cells (3 bits each)
+  std::vector<int32_t> inside, use;
+  // stage 2c -> 3: the crossings to search, in candidate order: candidate,
+  // parameter, point, row centre, span column, row and the depth bits of
+  // the span's three cells (3 bits each)
   std::vector<float> l_t, l_x, l_y, l_yk;
-  std::vector<int32_t> l_cs, l_k, l_bits;
+  std::vector<int32_t> l_c, l_cs, l_k, l_bits;
   // stage 3: entries, in the order the lanes finish them, with their live slot
   std::vector<int32_t> o_slot, o_hit;
   std::vector<float> o_sin, o_t;
@@ -345,8 +348,8 @@ struct Work {
   void reserve(size_t need) {
     const size_t cap = need + 32;
     if (pt.size() >= cap) return;
-    for (auto* v : {&pt, &row, &piece, &l_cs, &l_k, &l_bits, &o_slot, &o_hit, &pos_of, &b_pt, &b_o, &b_row, &b_col,
-                    &b_code, &b_colour})
+    for (auto* v : {&pt, &row, &piece, &inside, &use, &l_c, &l_cs, &l_k, &l_bits, &o_slot, &o_hit, &pos_of, &b_pt,
+                    &b_o, &b_row, &b_col, &b_code, &b_colour})
       v->resize(2 * cap, 0);
     for (auto* v : {&t, &l_t, &l_x, &l_y, &l_yk, &o_sin, &o_t, &b_pz, &b_nx, &b_ny, &b_nz, &b_tx, &b_ty, &b_tz})
       v->resize(2 * cap, 0.0f);
@@ -532,7 +535,6 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
   }
 
   // Stage 2: closest points (cubic of the interpolant, one Newton step).
-  int nlive = 0;
   const I lane_ix = {_mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0)};
   for (int c0 = 0; c0 < ncand; c0 += 16) {
     const M m = M((ncand - c0 >= 16) ? 0xFFFF : ((1u << (ncand - c0)) - 1u));
@@ -575,19 +577,61 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
     const M step = gt(phi2, fv(0.0f));
     t = sel(step, t - clampv(phi1 / sel(step, phi2, fv(1.0f)), fv(-0.4f), fv(0.4f)), t);
     store(wk.t.data() + c0, sel(near, t, fv(kBig)));
-    if (!near) continue;
-    // the live ones, with what stage 3 needs of them
+    // Whether the line passes through the tube at t: the entry search's
+    // first test (knit_newton_extreme), which is the hit the kernel's
+    // de-duplication below goes by
+    F q2x, q2y, e1x, e1y, e2x, e2y;
+    curve_xy_at(g, t, yk, X, Y, q2x, q2y, e1x, e1y, e2x, e2y);
+    store(wk.inside.data() + c0, sel(near & lt(q2x * q2x + q2y * q2y, fv(r2_s)), iv(1), iv(0)));
+  }
+
+  // Stage 2b: per point, in row and piece order, knit_line_query's
+  // de-duplication: a crossing found again from the next piece has the same
+  // closest point (within 0.1 of the row's last two crossings); only the
+  // first goes on to the entry search, and only if the line passes through
+  // its tube. A quarter of the candidates within reach are such repeats.
+  int cur_row[kBlock];
+  float last_t[kBlock], prev_t[kBlock];
+  for (int i = 0; i < n; ++i) cur_row[i] = INT32_MIN;
+  for (int c = 0; c < ncand; ++c) {
+    const size_t cz = size_t(c);
+    wk.use[cz] = 0;
+    const float t = wk.t[cz];
+    if (t == kBig) continue;
+    const int p = wk.pt[cz];
+    if (wk.row[cz] != cur_row[p]) {
+      cur_row[p] = wk.row[cz];
+      last_t[p] = prev_t[p] = -kBig;
+    }
+    if (std::fabs(t - last_t[p]) < 0.1f || std::fabs(t - prev_t[p]) < 0.1f) continue;
+    if (!wk.inside[cz]) continue;
+    prev_t[p] = last_t[p];
+    last_t[p] = t;
+    wk.use[cz] = 1;
+  }
+
+  // Stage 2c: the crossings to search, with what stage 3 needs of them.
+  int nlive = 0;
+  for (int c0 = 0; c0 < ncand; c0 += 16) {
+    const M m = M((ncand - c0 >= 16) ? 0xFFFF : ((1u << (ncand - c0)) - 1u));
+    const I use = {_mm512_maskz_loadu_epi32(m, wk.use.data() + c0)};
+    const M live = m & _mm512_test_epi32_mask(use.v, use.v);
+    if (!live) continue;
+    const I pt = {_mm512_maskz_loadu_epi32(live, wk.pt.data() + c0)};
+    const I kk = {_mm512_maskz_loadu_epi32(live, wk.row.data() + c0)};
+    const I gp = {_mm512_maskz_loadu_epi32(live, wk.piece.data() + c0)};
     const I cs = {_mm512_srai_epi32(gp.v, 3)};
     const I off = (iv(g.rows - 1) - modi(kk, g.rows)) * iv(g.cols);
-    const I bits = span_bits_at(span, off + modi(cs, g.cols), near);
-    compress_store(wk.l_t.data() + nlive, near, t);
-    compress_store(wk.l_x.data() + nlive, near, X);
-    compress_store(wk.l_y.data() + nlive, near, Y);
-    compress_store(wk.l_yk.data() + nlive, near, yk);
-    compress_store(wk.l_cs.data() + nlive, near, cs);
-    compress_store(wk.l_k.data() + nlive, near, kk);
-    compress_store(wk.l_bits.data() + nlive, near, bits);
-    nlive += __builtin_popcount(unsigned(near));
+    const I idx = {_mm512_add_epi32(lane_ix.v, _mm512_set1_epi32(c0))};
+    compress_store(wk.l_c.data() + nlive, live, idx);
+    compress_store(wk.l_t.data() + nlive, live, F{_mm512_maskz_loadu_ps(live, wk.t.data() + c0)});
+    compress_store(wk.l_x.data() + nlive, live, gather(xb, pt, live));
+    compress_store(wk.l_y.data() + nlive, live, gather(yb, pt, live));
+    compress_store(wk.l_yk.data() + nlive, live, (tof(kk) + fv(0.5f)) * s);
+    compress_store(wk.l_cs.data() + nlive, live, cs);
+    compress_store(wk.l_k.data() + nlive, live, kk);
+    compress_store(wk.l_bits.data() + nlive, live, span_bits_at(span, off + modi(cs, g.cols), live));
+    nlive += __builtin_popcount(unsigned(live));
   }
 
   // Stage 3: entries (knit_newton_extreme, sgn = -1, on the exact curve).
@@ -698,38 +742,30 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
   }
   for (int i = 0; i < nout; ++i) wk.pos_of[size_t(wk.o_slot[size_t(i)])] = i;
 
-  // Stage 4: per point, in row and piece order (knit_line_query's loop).
-  int cur_row[kBlock], best_i[kBlock], best_row[kBlock], count[kBlock];
-  float last_t[kBlock], prev_t[kBlock], best_s[kBlock];
+  // Stage 4: per point, over its crossings in row and piece order: the
+  // layer count and the first entry.
+  int best_i[kBlock], best_row[kBlock], count[kBlock];
+  float best_s[kBlock];
   for (int i = 0; i < n; ++i) {
-    cur_row[i] = INT32_MIN;
     best_i[i] = -1;
     count[i] = 0;
     best_s[i] = kBig;
   }
   const float s_max = 2.0f * top_s;
-  int lslot = 0;
-  for (int c = 0; c < ncand; ++c) {
-    const float t = wk.t[size_t(c)];
-    if (t == kBig) continue;
-    const int o = wk.pos_of[size_t(lslot++)];
-    const int p = wk.pt[size_t(c)];
-    if (wk.row[size_t(c)] != cur_row[p]) {
-      cur_row[p] = wk.row[size_t(c)];
-      last_t[p] = prev_t[p] = -kBig;
-    }
-    if (std::fabs(t - last_t[p]) < 0.1f || std::fabs(t - prev_t[p]) < 0.1f) continue;
-    if (!wk.o_hit[size_t(o)]) continue;
-    prev_t[p] = last_t[p];
-    last_t[p] = t;
+  for (int l = 0; l < nlive; ++l) {
+    const int o = wk.pos_of[size_t(l)];
+    if (!wk.o_hit[size_t(o)]) continue;  // (cannot happen: the line passes through the tube at the start)
+    const size_t cz = size_t(wk.l_c[size_t(l)]);
+    const int p = wk.pt[cz];
     const float si = wk.o_sin[size_t(o)];
     if (si <= s_max) ++count[p];
     if (si >= 0.0f && si <= s_max && si < best_s[p]) {
       best_s[p] = si;
       best_i[p] = o;
-      best_row[p] = wk.row[size_t(c)];
+      best_row[p] = wk.row[cz];
     }
   }
+
   // Stage 5: each point's first entry, evaluated again at its final t (the
   // same curve point the search ended on): position, normal, tangent, cell.
   int nb = 0;
