@@ -232,8 +232,17 @@ inline void solve_cubic_v(F a3, F a2, F a1, F a0, M m, F& r0, F& r1, F& r2, I& n
     const F den = p * mm;
     const F phi = acos_v(clampv(fv(3.0f) * q / sel(ne(den, fv(0.0f)), den, fv(1.0f)), fv(-1.0f), fv(1.0f))) *
                   fv(1.0f / 3.0f);
-    F sp, cp;
-    sincos_v(phi, sp, cp);
+    // phi in [0, pi/3]: sin and cos by their Taylor polynomials directly
+    // (no quadrant reduction; truncation below 4e-8 there)
+    const F p2 = phi * phi;
+    const F sp = phi + phi * p2 *
+                           (fv(-1.0f / 6.0f) +
+                            p2 * (fv(1.0f / 120.0f) + p2 * (fv(-1.0f / 5040.0f) + p2 * fv(1.0f / 362880.0f))));
+    const F cp =
+        fv(1.0f) +
+        p2 * (fv(-0.5f) +
+              p2 * (fv(1.0f / 24.0f) +
+                    p2 * (fv(-1.0f / 720.0f) + p2 * (fv(1.0f / 40320.0f) + p2 * fv(-1.0f / 3628800.0f)))));
     const F hc = fv(-0.5f) * cp, hs = fv(0.86602540378443864676f) * sp;
     c0 = sel(three, mm * cp - b3, c0);
     c1 = cubic_newton_v(a3s, a2, a1, a0, mm * (hc + hs) - b3);
