@@ -280,11 +280,13 @@ inline void solve_cubic_v(F a3, F a2, F a1, F a0, M m, F& r0, F& r1, F& r2, I& n
 struct BatchConsts {
   F oxl, oxh, oyl, oyh;     // knit_piece_offsets_xy
   F q0x, q0y, q1x, q1y, q2x, q2y;  // interpolant relative to (t0, y_k)
+  F cx, cy, il2, hq2;       // its chord q1 + q2, 1 / |chord|^2 (0 if none), |q2| / 4
 };
 
 BatchConsts make_consts(const k::KnitGeom& g) {
   alignas(64) float oxl[16] = {}, oxh[16] = {}, oyl[16] = {}, oyh[16] = {};
   alignas(64) float q0x[16] = {}, q0y[16] = {}, q1x[16] = {}, q1y[16] = {}, q2x[16] = {}, q2y[16] = {};
+  alignas(64) float cx[16] = {}, cy[16] = {}, il2[16] = {}, hq2[16] = {};
   for (int j = 0; j < 8; ++j) {
     const k::KBox o = k::knit_piece_offsets_xy(g, j);
     oxl[j] = o.lo.x;
@@ -306,9 +308,14 @@ BatchConsts make_consts(const k::KnitGeom& g) {
     q1y[j] = float(4 * ny[1] - 3 * ny[0] - ny[2]);
     q2x[j] = float(2 * (nx[0] - 2 * nx[1] + nx[2]));
     q2y[j] = float(2 * (ny[0] - 2 * ny[1] + ny[2]));
+    cx[j] = q1x[j] + q2x[j];
+    cy[j] = q1y[j] + q2y[j];
+    const float l2 = cx[j] * cx[j] + cy[j] * cy[j];
+    il2[j] = l2 > 0.0f ? 1.0f / l2 : 0.0f;
+    hq2[j] = 0.25f * std::sqrt(q2x[j] * q2x[j] + q2y[j] * q2y[j]);
   }
-  return {load(oxl), load(oxh), load(oyl), load(oyh), load(q0x), load(q0y),
-          load(q1x), load(q1y), load(q2x), load(q2y)};
+  return {load(oxl), load(oxh), load(oyl), load(oyh), load(q0x), load(q0y), load(q1x),
+          load(q1y), load(q2x), load(q2y), load(cx),  load(cy),  load(il2), load(hq2)};
 }
 
 // The curve of a lane's row at t: x and y relative to the lane's point
@@ -524,16 +531,14 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
         v &= ge(Y, (yk + lookup(kc.oyl, j)) - rr) & le(Y, (yk + lookup(kc.oyh, j)) + rr);
         v &= ge(X, (t0 + lookup(kc.oxl, j)) - rr) & le(X, ((t0 + pi4) + lookup(kc.oxh, j)) + rr);
         if (!v) continue;
-        // knit_quad_xy_distance_bound, relative to (t0, y_k)
-        const F q1x = lookup(kc.q1x, j), q1y = lookup(kc.q1y, j), q2x = lookup(kc.q2x, j), q2y = lookup(kc.q2y, j);
-        const F cx = q1x + q2x, cy = q1y + q2y;
+        // knit_quad_xy_distance_bound, relative to (t0, y_k), its per-piece
+        // parts from the table: |d| - |q2|/4 <= thr, taken squared
+        const F cx = lookup(kc.cx, j), cy = lookup(kc.cy, j);
         const F ax = (X - t0) - lookup(kc.q0x, j), ay = Yl - lookup(kc.q0y, j);
-        const F l2 = cx * cx + cy * cy;
-        const M lpos = gt(l2, fv(0.0f));
-        const F u = sel(lpos, clampv((ax * cx + ay * cy) / sel(lpos, l2, fv(1.0f)), fv(0.0f), fv(1.0f)), fv(0.0f));
+        const F u = clampv((ax * cx + ay * cy) * lookup(kc.il2, j), fv(0.0f), fv(1.0f));
         const F dx = ax - u * cx, dy = ay - u * cy;
-        const F bound = vsqrt(dx * dx + dy * dy) - fv(0.25f) * vsqrt(q2x * q2x + q2y * q2y);
-        v &= le(bound, thr);
+        const F reach = thr + lookup(kc.hq2, j);
+        v &= le(dx * dx + dy * dy, reach * reach);
         if (!v) continue;
         compress_store(wk.pt.data() + ncand, v, lane_id);
         compress_store(wk.row.data() + ncand, v, kk);
