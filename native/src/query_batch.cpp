@@ -9,19 +9,22 @@
 //      same order). Lanes that pass are compressed into a list, so the
 //      costly stages below run on full vectors of live work.
 //   2. closest points: the cubic of the piece's interpolant (Cardano or
-//      Viete, as cubic.h), then one Newton step on the exact curve.
+//      Viete, as cubic.h), one Newton step on the exact curve, and whether
+//      the line passes through the tube there.
+//   2b. per point, in row and piece order, the kernel's de-duplication: a
+//      crossing found again from the next piece, or a closest point outside
+//      the tube, is not searched.
 //   3. entries: the safeguarded Newton search of knit_newton_extreme for the
 //      entry (the maximum of z(t) + sqrt(r^2 - rho(t)^2)) on the exact curve,
-//      depth signs and blends included. Each lane takes the next candidate
+//      depth signs and blends included. Each lane takes the next crossing
 //      as soon as its search ends (one curve evaluation per lane per round).
-//   4. per point, in row and piece order: the kernel's de-duplication of a
-//      crossing found from two pieces, the layer count and the first entry.
+//   4. per point: the layer count and the first entry.
 //   5. each point's first entry evaluated again at its final parameter:
 //      position, normal, tangent and cell.
 // A vertical line's distance to a knit or purl yarn lies in x and y, which
 // do not depend on the codes (stitch.h), so stages 1-2 never read the
-// pattern; the live candidates take the depth signs of the three cells
-// around their piece from KnitSurface::span_bits, one gather each.
+// pattern; the crossings take the depth signs of the three cells around
+// their piece from KnitSurface::span_bits, one gather each.
 //
 // The same mathematics as the scalar kernel, evaluated in a different
 // order and with fused multiply-adds: results agree with query() up to float
