@@ -857,7 +857,7 @@ void query_avx512(const KnitSurface& surf, const float* x, const float* y, size_
   // Reused between calls (no allocation per call once grown); stage 1
   // grows it when a vector of points could overflow it.
   static thread_local Work wk;
-  wk.reserve(size_t(kBlock) * 24);
+  wk.reserve(size_t(kBlock) * 4);  // 2.5 candidates per point on average with Crane's stitch
   for (size_t b = 0; b < n; b += kBlock) {
     const int nb = int(std::min<size_t>(kBlock, n - b));
     query_block_avx512(surf, kc, x + b, y + b, nb, out + b, wk);
