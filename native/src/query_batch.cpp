@@ -147,19 +147,25 @@ inline I modi(I a, int n) {
 }
 inline I ifloor(F a) { return toi_trunc(vfloor(a)); }
 
+// The Taylor polynomials of sin and cos to y^9 and y^10 (knit_sincos's):
+// truncation below 2e-9 on [-pi/4, pi/4], below 4e-8 on [0, pi/3].
+inline void sincos_taylor(F y, F& s, F& c) {
+  const F y2 = y * y;
+  s = y + y * y2 *
+              (fv(-1.0f / 6.0f) +
+               y2 * (fv(1.0f / 120.0f) + y2 * (fv(-1.0f / 5040.0f) + y2 * fv(1.0f / 362880.0f))));
+  c = fv(1.0f) +
+      y2 * (fv(-0.5f) +
+            y2 * (fv(1.0f / 24.0f) +
+                  y2 * (fv(-1.0f / 720.0f) + y2 * (fv(1.0f / 40320.0f) + y2 * fv(-1.0f / 3628800.0f)))));
+}
+
 // knit_sincos, lane by lane (the same reduction and polynomials).
 inline void sincos_v(F x, F& s_out, F& c_out) {
   const F qf = tof(toi_trunc(x * fv(0.63661977236758134308f) + sel(ge(x, fv(0.0f)), fv(0.5f), fv(-0.5f))));
   const F y = ((x - qf * fv(1.5703125f)) - qf * fv(4.837512969970703125e-4f)) - qf * fv(7.549789954891882e-8f);
-  const F y2 = y * y;
-  const F s = y + y * y2 *
-                      (fv(-1.0f / 6.0f) +
-                       y2 * (fv(1.0f / 120.0f) + y2 * (fv(-1.0f / 5040.0f) + y2 * fv(1.0f / 362880.0f))));
-  const F c =
-      fv(1.0f) +
-      y2 * (fv(-0.5f) +
-            y2 * (fv(1.0f / 24.0f) +
-                  y2 * (fv(-1.0f / 720.0f) + y2 * (fv(1.0f / 40320.0f) + y2 * fv(-1.0f / 3628800.0f)))));
+  F s, c;
+  sincos_taylor(y, s, c);
   const I n = toi_trunc(qf) & iv(3);
   const M q1 = ieq(n, iv(1)), q2 = ieq(n, iv(2)), q3 = ieq(n, iv(3));
   s_out = sel(q1, c, sel(q2, -s, sel(q3, -c, s)));
@@ -235,17 +241,10 @@ inline void solve_cubic_v(F a3, F a2, F a1, F a0, M m, F& r0, F& r1, F& r2, I& n
     const F den = p * mm;
     const F phi = acos_v(clampv(fv(3.0f) * q / sel(ne(den, fv(0.0f)), den, fv(1.0f)), fv(-1.0f), fv(1.0f))) *
                   fv(1.0f / 3.0f);
-    // phi in [0, pi/3]: sin and cos by their Taylor polynomials directly
-    // (no quadrant reduction; truncation below 4e-8 there)
-    const F p2 = phi * phi;
-    const F sp = phi + phi * p2 *
-                           (fv(-1.0f / 6.0f) +
-                            p2 * (fv(1.0f / 120.0f) + p2 * (fv(-1.0f / 5040.0f) + p2 * fv(1.0f / 362880.0f))));
-    const F cp =
-        fv(1.0f) +
-        p2 * (fv(-0.5f) +
-              p2 * (fv(1.0f / 24.0f) +
-                    p2 * (fv(-1.0f / 720.0f) + p2 * (fv(1.0f / 40320.0f) + p2 * fv(-1.0f / 3628800.0f)))));
+    // phi in [0, pi/3]: sin and cos by the polynomials directly, without
+    // the quadrant reduction
+    F sp, cp;
+    sincos_taylor(phi, sp, cp);
     const F hc = fv(-0.5f) * cp, hs = fv(0.86602540378443864676f) * sp;
     c0 = sel(three, mm * cp - b3, c0);
     c1 = cubic_newton_v(a3s, a2, a1, a0, mm * (hc + hs) - b3);
