@@ -58,7 +58,8 @@ BENCHMARK(BM_VerticalQuery)->Arg(0)->Arg(1);
 
 // The same queries through KnitSurface::query_batch, 4096 points per call
 // (AVX-512, 16 points at a time, where the CPU has it: the label says which
-// path ran). Arg 2 forces the scalar path for the ratio in one run.
+// path ran). A second argument of 1 forces the scalar path, for the ratio in
+// one run.
 void BM_VerticalQueryBatch(benchmark::State& state) {
   const Pattern pat = state.range(0) == 0 ? test::stockinette() : test::pyramid16();
   KnitSurface s(pat, StitchParams{});

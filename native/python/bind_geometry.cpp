@@ -124,23 +124,25 @@ class PyKnitSurface {
     HitArrays out(P.n);
     ::py::array_t<double> z(P.n);
     double* pz = z.mutable_data();
-    // Blocks of kQueryBlock points through KnitSurface::query_batch (16 at
-    // a time with AVX-512 where the CPU has it), the blocks on every core.
+    // Ranges of points through KnitSurface::query_batch (16 at a time with
+    // AVX-512 where the CPU has it), in pieces of at most kQueryBlock; the
+    // ranges on every core from kParallelRows points up.
     constexpr ssize_t kQueryBlock = 1024;
-    const ssize_t nblocks = (P.n + kQueryBlock - 1) / kQueryBlock;
-    for_each_row(nblocks, [&](ssize_t b) {
-      const ssize_t i0 = b * kQueryBlock, m = std::min(kQueryBlock, P.n - i0);
-      std::vector<float> xs(static_cast<size_t>(m)), ys(static_cast<size_t>(m));
-      std::vector<SurfaceHit> hs(static_cast<size_t>(m));
-      for (ssize_t j = 0; j < m; ++j) {
-        const ssize_t i = i0 + j;
-        xs[j] = float(uv_scale_ * P.pu[P.su ? 0 : i]);
-        ys[j] = float(uv_scale_ * P.pv[P.sv ? 0 : i]);
-      }
-      surf_.query_batch(xs.data(), ys.data(), size_t(m), hs.data());
-      for (ssize_t j = 0; j < m; ++j) {
-        out.set(i0 + j, hs[j], xs[j], ys[j]);
-        pz[i0 + j] = hs[j].hit ? hs[j].position.z : std::nan("");
+    for_each_range(P.n, kQueryBlock, [&](ssize_t begin, ssize_t end) {
+      std::vector<float> xs(static_cast<size_t>(kQueryBlock)), ys(static_cast<size_t>(kQueryBlock));
+      std::vector<SurfaceHit> hs(static_cast<size_t>(kQueryBlock));
+      for (ssize_t i0 = begin; i0 < end; i0 += kQueryBlock) {
+        const ssize_t m = std::min(kQueryBlock, end - i0);
+        for (ssize_t j = 0; j < m; ++j) {
+          const ssize_t i = i0 + j;
+          xs[size_t(j)] = float(uv_scale_ * P.pu[P.su ? 0 : i]);
+          ys[size_t(j)] = float(uv_scale_ * P.pv[P.sv ? 0 : i]);
+        }
+        surf_.query_batch(xs.data(), ys.data(), size_t(m), hs.data());
+        for (ssize_t j = 0; j < m; ++j) {
+          out.set(i0 + j, hs[size_t(j)], xs[size_t(j)], ys[size_t(j)]);
+          pz[i0 + j] = hs[size_t(j)].hit ? hs[size_t(j)].position.z : std::nan("");
+        }
       }
     });
     ::py::dict d = out.dict();
