@@ -115,7 +115,6 @@ inline F vfloor(F a) { return {_mm512_roundscale_ps(a.v, _MM_FROUND_TO_NEG_INF |
 inline F vceil(F a) { return {_mm512_roundscale_ps(a.v, _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC)}; }
 inline F tof(I a) { return {_mm512_cvtepi32_ps(a.v)}; }
 inline I toi_trunc(F a) { return {_mm512_cvttps_epi32(a.v)}; }
-inline F fma(F a, F b, F c) { return {_mm512_fmadd_ps(a.v, b.v, c.v)}; }
 inline F sgn1(F a) { return sel(lt(a, fv(0.0f)), fv(-1.0f), fv(1.0f)); }  // k_signf
 // table[j] for j in 0..15 (a 16-entry table held in a register)
 inline F lookup(const F& table, I j) { return {_mm512_permutexvar_ps(j.v, table.v)}; }
@@ -126,7 +125,6 @@ inline I gather(const int32_t* base, I idx, M m) {
   return {_mm512_mask_i32gather_epi32(_mm512_setzero_si512(), m, idx.v, base, 4)};
 }
 inline F load(const float* p) { return {_mm512_loadu_ps(p)}; }
-inline I load(const int32_t* p) { return {_mm512_loadu_si512(p)}; }
 inline void store(float* p, F a) { _mm512_storeu_ps(p, a.v); }
 inline void store(int32_t* p, I a) { _mm512_storeu_si512(p, a.v); }
 inline void compress_store(float* p, M m, F a) { _mm512_storeu_ps(p, _mm512_maskz_compress_ps(m, a.v)); }
@@ -146,6 +144,13 @@ inline I modi(I a, int n) {
   return r;
 }
 inline I ifloor(F a) { return toi_trunc(vfloor(a)); }
+// The first min(left, 16) lanes.
+inline M tail_mask(int left) { return M(left >= 16 ? 0xFFFF : (1u << left) - 1u); }
+// Lane numbers plus base: base, base + 1, ..., base + 15.
+inline I lane_index(int base) {
+  return {_mm512_add_epi32(_mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0),
+                           _mm512_set1_epi32(base))};
+}
 
 // The Taylor polynomials of sin and cos to y^9 and y^10 (knit_sincos's):
 // truncation below 2e-9 on [-pi/4, pi/4], below 4e-8 on [0, pi/3].
@@ -405,36 +410,61 @@ inline I bits_of(const k::KnitGeom& g, const uint16_t* span, const SpanV& sp, I 
   return b;
 }
 
+// x and y of each lane's row at t (the same for knit and purl cells),
+// relative to its point, with their derivatives; and what the depth needs:
+// t's column c, tau = t - its centre, sin and cos of tau.
+struct CurveXY {
+  I c;
+  F tau, s1, c1;
+  F qx, qy, d1x, d1y, d2x, d2y;
+};
+
+inline CurveXY curve_xy_at(const k::KnitGeom& g, F t, F yk, F X, F Y) {
+  const F two_pi = fv(6.28318530717958647692f), pi = fv(3.14159265358979323846f);
+  CurveXY r;
+  r.c = ifloor(t * fv(0.15915494309189533577f));
+  const F tc = two_pi * tof(r.c) + pi;
+  r.tau = t - tc;
+  sincos_v(r.tau, r.s1, r.c1);
+  const F s2 = fv(2.0f) * r.s1 * r.c1, c2 = r.c1 * r.c1 - r.s1 * r.s1;
+  const F a = fv(g.a), h = fv(g.h);
+  r.qx = ((tc + r.tau) + a * s2) - X;
+  r.qy = (yk + h * r.c1) - Y;
+  r.d1x = fv(1.0f) + fv(2.0f) * a * c2;
+  r.d1y = -h * r.s1;
+  r.d2x = fv(-4.0f) * a * s2;
+  r.d2y = -h * r.c1;
+  return r;
+}
+
+// z = d P(cos tau) and its first two derivatives in t for a cell whose
+// depth-sign bits are `bits` (knit_depth_poly and knit_profile).
+inline void depth_at(I bits, F d, F s1, F c1, F& z, F& z1, F& z2) {
+  F A, B, sl;
+  depth_coeffs(bits, A, B, sl);
+  const F P = (A + B * c1) * (c1 * c1) - sl, P1 = (fv(2.0f) * A + fv(3.0f) * B * c1) * c1,
+          P2 = fv(2.0f) * A + fv(6.0f) * B * c1;
+  z = d * P;
+  z1 = -d * P1 * s1;
+  z2 = d * (P2 * s1 * s1 - P1 * c1);
+}
+
 // The exact curve of each lane's row at t, relative to its point in x and
 // y (knit_span_curve_at for knit and purl cells: the profile of t's column,
 // blended with its neighbour's near their boundary; x and y do not depend
 // on the cells, so the neighbour's profile shares sin and cos).
 inline CurveV curve_at(const k::KnitGeom& g, const uint16_t* span, const SpanV& sp, F t, M m) {
   const F two_pi = fv(6.28318530717958647692f), pi = fv(3.14159265358979323846f), pi4 = fv(0.78539816339744830962f);
-  const I c = ifloor(t * fv(0.15915494309189533577f));
-  const F tc = two_pi * tof(c) + pi;
-  const F tau = t - tc;
-  const I side = sel(gt(tau, pi - pi4), iv(1), sel(lt(tau, pi4 - pi), iv(-1), iv(0)));
+  const CurveXY xy = curve_xy_at(g, t, sp.yk, sp.X, sp.Y);
+  const I c = xy.c;
+  const I side = sel(gt(xy.tau, pi - pi4), iv(1), sel(lt(xy.tau, pi4 - pi), iv(-1), iv(0)));
   const I nc = c + side;
   const I bself = bits_of(g, span, sp, c, m);
   const I bnb = bits_of(g, span, sp, nc, m & ~ieq(side, iv(0)));
-  F s1, c1;
-  sincos_v(tau, s1, c1);
-  const F s2 = fv(2.0f) * s1 * c1, c2 = c1 * c1 - s1 * s1;
-  const F a = fv(g.a), h = fv(g.h), d = fv(g.d);
-  CurveV cv;
-  cv.qx = ((tc + tau) + a * s2) - sp.X;
-  cv.qy = (sp.yk + h * c1) - sp.Y;
-  cv.d1x = fv(1.0f) + fv(2.0f) * a * c2;
-  cv.d1y = -h * s1;
-  cv.d2x = fv(-4.0f) * a * s2;
-  cv.d2y = -h * c1;
-  F A, B, sl;
-  depth_coeffs(bself, A, B, sl);
-  const F c1s = c1 * c1;
-  const F P = (A + B * c1) * c1s - sl, P1 = (fv(2.0f) * A + fv(3.0f) * B * c1) * c1,
-          P2 = fv(2.0f) * A + fv(6.0f) * B * c1;
-  const F zs = d * P, z1s = -d * P1 * s1, z2s = d * (P2 * s1 * s1 - P1 * c1);
+  const F d = fv(g.d);
+  CurveV cv{xy.qx, xy.qy, fv(0.0f), xy.d1x, xy.d1y, fv(0.0f), xy.d2x, xy.d2y, fv(0.0f)};
+  F zs, z1s, z2s;
+  depth_at(bself, d, xy.s1, xy.c1, zs, z1s, z2s);
   const M blend = m & ~ieq(side, iv(0)) & ~ieq(bnb, bself);
   if (!blend) {  // no lane near a boundary with a cell of other signs: its own profile
     cv.z = zs;
@@ -442,11 +472,8 @@ inline CurveV curve_at(const k::KnitGeom& g, const uint16_t* span, const SpanV& 
     cv.z2 = z2s;
     return cv;
   }
-  F An, Bn, sln;
-  depth_coeffs(sel(ieq(side, iv(0)), bself, bnb), An, Bn, sln);
-  const F Pn = (An + Bn * c1) * c1s - sln, P1n = (fv(2.0f) * An + fv(3.0f) * Bn * c1) * c1,
-          P2n = fv(2.0f) * An + fv(6.0f) * Bn * c1;
-  const F zn = d * Pn, z1n = -d * P1n * s1, z2n = d * (P2n * s1 * s1 - P1n * c1);
+  F zn, z1n, z2n;
+  depth_at(sel(ieq(side, iv(0)), bself, bnb), d, xy.s1, xy.c1, zn, z1n, z2n);
   const M self_lo = igt(nc, c);  // the neighbour is on the right: self is left of the boundary
   const F zlo = sel(self_lo, zs, zn), z1lo = sel(self_lo, z1s, z1n), z2lo = sel(self_lo, z2s, z2n);
   const F e0 = sel(self_lo, zn, zs) - zlo, e1 = sel(self_lo, z1n, z1s) - z1lo, e2 = sel(self_lo, z2n, z2s) - z2lo;
@@ -463,23 +490,10 @@ inline CurveV curve_at(const k::KnitGeom& g, const uint16_t* span, const SpanV& 
   return cv;
 }
 
-// x and y only of the curve at t (stage 2's Newton step on the distance):
-// qx, qy relative to the point and the first two derivatives.
-inline void curve_xy_at(const k::KnitGeom& g, F t, F yk, F X, F Y, F& qx, F& qy, F& d1x, F& d1y, F& d2x,
-                        F& d2y) {
-  const F two_pi = fv(6.28318530717958647692f), pi = fv(3.14159265358979323846f);
-  const F tc = two_pi * tof(ifloor(t * fv(0.15915494309189533577f))) + pi;
-  const F tau = t - tc;
-  F s1, c1;
-  sincos_v(tau, s1, c1);
-  const F s2 = fv(2.0f) * s1 * c1, c2 = c1 * c1 - s1 * s1;
-  const F a = fv(g.a), h = fv(g.h);
-  qx = ((tc + tau) + a * s2) - X;
-  qy = (yk + h * c1) - Y;
-  d1x = fv(1.0f) + fv(2.0f) * a * c2;
-  d1y = -h * s1;
-  d2x = fv(-4.0f) * a * s2;
-  d2y = -h * c1;
+// m ? a : b for every field.
+inline CurveV sel(M m, const CurveV& a, const CurveV& b) {
+  return {sel(m, a.qx, b.qx),   sel(m, a.qy, b.qy),   sel(m, a.z, b.z),    sel(m, a.d1x, b.d1x), sel(m, a.d1y, b.d1y),
+          sel(m, a.z1, b.z1),   sel(m, a.d2x, b.d2x), sel(m, a.d2y, b.d2y), sel(m, a.z2, b.z2)};
 }
 
 constexpr float kBig = 1.0e30f;
@@ -506,19 +520,18 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
   // Stage 1: candidates.
   int ncand = 0;
   for (int base = 0; base < n; base += 16) {
-    const M lanes = M((n - base >= 16) ? 0xFFFF : ((1u << (n - base)) - 1u));
+    const M lanes = tail_mask(n - base);
     const F X = load(xb + base), Y = load(yb + base);
     const M vm = lanes & lt(vabs(X), fv(1.0e7f)) & lt(vabs(Y), fv(1.0e7f));
     if (!vm) continue;
-    const I k0 = ifloor(-(vfloor(-(((Y - fv(g.h)) - rr) / s - fv(0.5f)))));  // ceil
+    const I k0 = toi_trunc(vceil(((Y - fv(g.h)) - rr) / s - fv(0.5f)));
     const I k1 = ifloor(((Y + fv(g.h)) + rr) / s - fv(0.5f));
     const I g0 = ifloor(((X - rr) - fv(g.a)) / pi4);
     const I g1 = ifloor(((X + rr) + fv(g.a)) / pi4);
     const int nk = _mm512_mask_reduce_max_epi32(vm, (k1 - k0).v) + 1;
     const int ng = _mm512_mask_reduce_max_epi32(vm, (g1 - g0).v) + 1;
     wk.reserve(size_t(ncand) + 16 * size_t(nk) * size_t(ng));  // (no pointer into wk is held across this)
-    const I lane_id = {_mm512_add_epi32(_mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0),
-                                        _mm512_set1_epi32(base))};
+    const I lane_id = lane_index(base);
     for (int dk = 0; dk < nk; ++dk) {
       const I kk = k0 + iv(dk);
       const M vk = vm & ile(kk, k1);
@@ -551,9 +564,8 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
   }
 
   // Stage 2: closest points (cubic of the interpolant, one Newton step).
-  const I lane_ix = {_mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0)};
   for (int c0 = 0; c0 < ncand; c0 += 16) {
-    const M m = M((ncand - c0 >= 16) ? 0xFFFF : ((1u << (ncand - c0)) - 1u));
+    const M m = tail_mask(ncand - c0);
     const I pt = {_mm512_maskz_loadu_epi32(m, wk.pt.data() + c0)};
     const I kk = {_mm512_maskz_loadu_epi32(m, wk.row.data() + c0)};
     const I gp = {_mm512_maskz_loadu_epi32(m, wk.piece.data() + c0)};
@@ -586,19 +598,17 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
     }
     const M near = m & le(best, fv(m_s * m_s));
     F t = t0 + bu * pi4;
-    F qx, qy, d1x, d1y, d2x, d2y;
-    curve_xy_at(g, t, yk, X, Y, qx, qy, d1x, d1y, d2x, d2y);
-    const F phi1 = qx * d1x + qy * d1y;
-    const F phi2 = (d1x * d1x + d1y * d1y) + (qx * d2x + qy * d2y);
+    const CurveXY at = curve_xy_at(g, t, yk, X, Y);
+    const F phi1 = at.qx * at.d1x + at.qy * at.d1y;
+    const F phi2 = (at.d1x * at.d1x + at.d1y * at.d1y) + (at.qx * at.d2x + at.qy * at.d2y);
     const M step = gt(phi2, fv(0.0f));
     t = sel(step, t - clampv(phi1 / sel(step, phi2, fv(1.0f)), fv(-0.4f), fv(0.4f)), t);
     store(wk.t.data() + c0, sel(near, t, fv(kBig)));
     // Whether the line passes through the tube at t: the entry search's
     // first test (knit_newton_extreme), which is the hit the kernel's
     // de-duplication below goes by
-    F q2x, q2y, e1x, e1y, e2x, e2y;
-    curve_xy_at(g, t, yk, X, Y, q2x, q2y, e1x, e1y, e2x, e2y);
-    store(wk.inside.data() + c0, sel(near & lt(q2x * q2x + q2y * q2y, fv(r2_s)), iv(1), iv(0)));
+    const CurveXY at2 = curve_xy_at(g, t, yk, X, Y);
+    store(wk.inside.data() + c0, sel(near & lt(at2.qx * at2.qx + at2.qy * at2.qy, fv(r2_s)), iv(1), iv(0)));
   }
 
   // Stage 2b: per point, in row and piece order, knit_line_query's
@@ -629,7 +639,7 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
   // Stage 2c: the crossings to search, with what stage 3 needs of them.
   int nlive = 0;
   for (int c0 = 0; c0 < ncand; c0 += 16) {
-    const M m = M((ncand - c0 >= 16) ? 0xFFFF : ((1u << (ncand - c0)) - 1u));
+    const M m = tail_mask(ncand - c0);
     const I use = {_mm512_maskz_loadu_epi32(m, wk.use.data() + c0)};
     const M live = m & _mm512_test_epi32_mask(use.v, use.v);
     if (!live) continue;
@@ -638,8 +648,7 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
     const I gp = {_mm512_maskz_loadu_epi32(live, wk.piece.data() + c0)};
     const I cs = {_mm512_srai_epi32(gp.v, 3)};
     const I off = (iv(g.rows - 1) - modi(kk, g.rows)) * iv(g.cols);
-    const I idx = {_mm512_add_epi32(lane_ix.v, _mm512_set1_epi32(c0))};
-    compress_store(wk.l_c.data() + nlive, live, idx);
+    compress_store(wk.l_c.data() + nlive, live, lane_index(c0));
     compress_store(wk.l_t.data() + nlive, live, F{_mm512_maskz_loadu_ps(live, wk.t.data() + c0)});
     compress_store(wk.l_x.data() + nlive, live, gather(xb, pt, live));
     compress_store(wk.l_y.data() + nlive, live, gather(yb, pt, live));
@@ -721,7 +730,7 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
         sp.cs = ex_i(wk.l_cs, sp.cs);
         sp.k = ex_i(wk.l_k, sp.k);
         sp.bits = ex_i(wk.l_bits, sp.bits);
-        slot = I{_mm512_mask_expand_epi32(slot.v, nw, (lane_ix + iv(next)).v)};
+        slot = I{_mm512_mask_expand_epi32(slot.v, nw, lane_index(next).v)};
         phase = sel(nw, iv(kInit), phase);
         it = sel(nw, iv(0), it);
         next += take;
@@ -736,15 +745,7 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
       const M inside = lt(nrho2, r2);
       const M ok = (init & inside) | (trial & inside & ge((nc.z - top) + vsqrt(vmax(r2 - nrho2, fv(0.0f))), f));
       t = sel(ok, tn, t);
-      cv.qx = sel(ok, nc.qx, cv.qx);
-      cv.qy = sel(ok, nc.qy, cv.qy);
-      cv.z = sel(ok, nc.z, cv.z);
-      cv.d1x = sel(ok, nc.d1x, cv.d1x);
-      cv.d1y = sel(ok, nc.d1y, cv.d1y);
-      cv.z1 = sel(ok, nc.z1, cv.z1);
-      cv.d2x = sel(ok, nc.d2x, cv.d2x);
-      cv.d2y = sel(ok, nc.d2y, cv.d2y);
-      cv.z2 = sel(ok, nc.z2, cv.z2);
+      cv = sel(ok, nc, cv);
       rho2 = sel(ok, nrho2, rho2);
       phase = sel(ok, iv(kStep), phase);
       done |= init & ~inside;  // the start is outside the tube: no crossing
@@ -798,7 +799,7 @@ void query_block_avx512(const KnitSurface& surf, const BatchConsts& kc, const fl
     ++nb;
   }
   for (int c0 = 0; c0 < nb; c0 += 16) {
-    const M m = M((nb - c0 >= 16) ? 0xFFFF : ((1u << (nb - c0)) - 1u));
+    const M m = tail_mask(nb - c0);
     const I o = {_mm512_maskz_loadu_epi32(m, wk.b_o.data() + c0)};
     const I sl = gather(wk.o_slot.data(), o, m);
     const F t = gather(wk.o_t.data(), o, m);

@@ -37,27 +37,22 @@ KnitSurface::KnitSurface(Pattern pattern, StitchParams params)
   geom_ = k::knit_geom_make(params_.a, params_.h, params_.d, params_.r, pattern_.rows(),
                             pattern_.cols(), floats ? 1 : 0);
   if (!floats) {
-    // Depth signs of every cell (stitch.h: head from the row above, legs its
-    // own, sinker from the row below; all loops here), then of each cell's
-    // span of three.
+    // Each cell's span of three (the kernel's knit_span: the cells left of,
+    // at and right of it, with their depth signs), 3 bits a cell, set for
+    // purl.
+    const auto purl_bits = [](const k::KCell& c) {
+      return unsigned(c.sg.x < 0 ? 1 : 0) | unsigned(c.sg.y < 0 ? 2 : 0) | unsigned(c.sg.z < 0 ? 4 : 0);
+    };
     const int rows = pattern_.rows(), cols = pattern_.cols();
-    const int32_t* c = codes();
-    std::vector<uint16_t> cell(size_t(rows) * size_t(cols));
+    span_bits_.assign(size_t(rows) * size_t(cols) + 1, 0);  // (+1: padding for the 32-bit gathers)
     for (int pr = 0; pr < rows; ++pr) {
-      const int up = (pr + rows - 1) % rows, dn = (pr + 1) % rows;  // rows k + 1 and k - 1 (top first)
+      const k::KRow rw = k::knit_row(geom_, rows - 1 - pr);  // codes row pr (written top first)
       for (int cm = 0; cm < cols; ++cm) {
-        const auto purl = [&](int r) { return c[size_t(r) * size_t(cols) + size_t(cm)] == KNIT_CODE_PURL; };
-        cell[size_t(pr) * size_t(cols) + size_t(cm)] = uint16_t((purl(up) ? 1 : 0) | (purl(pr) ? 2 : 0) | (purl(dn) ? 4 : 0));
+        const k::KSpan sp = k::knit_span(geom_, codes(), rw, cm);
+        span_bits_[size_t(rw.off) + size_t(cm)] =
+            uint16_t(purl_bits(sp.left) | (purl_bits(sp.mid) << 3) | (purl_bits(sp.right) << 6));
       }
     }
-    span_bits_.assign(cell.size() + 1, 0);
-    for (int pr = 0; pr < rows; ++pr)
-      for (int cm = 0; cm < cols; ++cm) {
-        const size_t row0 = size_t(pr) * size_t(cols);
-        const int l = cm == 0 ? cols - 1 : cm - 1, r = cm == cols - 1 ? 0 : cm + 1;
-        span_bits_[row0 + size_t(cm)] =
-            uint16_t(cell[row0 + size_t(l)] | (cell[row0 + size_t(cm)] << 3) | (cell[row0 + size_t(r)] << 6));
-      }
   }
 }
 
