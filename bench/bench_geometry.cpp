@@ -57,15 +57,21 @@ void BM_VerticalQuery(benchmark::State& state) {
 BENCHMARK(BM_VerticalQuery)->Arg(0)->Arg(1);
 
 // The same queries through KnitSurface::query_batch, 4096 points per call
-// (AVX-512, 16 points at a time, where the CPU has it: the label says which
-// path ran). A second argument of 1 forces the scalar path, for the ratio in
-// one run.
+// (AVX-512, 16 points at a time, or AVX2, 8 at a time, whichever the CPU
+// has: the label says which path ran). A second argument of 1 forces the
+// scalar path and 2 the AVX2 one, for the ratios in one run.
 void BM_VerticalQueryBatch(benchmark::State& state) {
   const Pattern pat = state.range(0) == 0 ? test::stockinette() : test::pyramid16();
   KnitSurface s(pat, StitchParams{});
   Pts p = random_points(s, 4096, 1);
   std::vector<SurfaceHit> out(4096);
-  const auto path = state.range(1) != 0 ? KnitSurface::BatchPath::Scalar : KnitSurface::BatchPath::Auto;
+  const auto path = state.range(1) == 1   ? KnitSurface::BatchPath::Scalar
+                    : state.range(1) == 2 ? KnitSurface::BatchPath::Avx2
+                                          : KnitSurface::BatchPath::Auto;
+  if (path == KnitSurface::BatchPath::Avx2 && !KnitSurface::batch_simd_available()) {
+    state.SkipWithError("this CPU has no AVX2 with FMA");
+    return;
+  }
   long hits = 0;
   for (auto _ : state) {
     s.query_batch(p.x.data(), p.y.data(), 4096, out.data(), path);
@@ -75,9 +81,9 @@ void BM_VerticalQueryBatch(benchmark::State& state) {
   }
   state.counters["q/s"] = benchmark::Counter(4096.0 * double(state.iterations()), benchmark::Counter::kIsRate);
   state.SetLabel(std::string(state.range(0) == 0 ? "stockinette" : "pyramid16") +
-                 (s.batch_uses_simd(path) ? " avx512" : " scalar"));
+                 " " + KnitSurface::batch_isa_name(s.batch_isa(path)));
 }
-BENCHMARK(BM_VerticalQueryBatch)->ArgsProduct({{0, 1}, {0, 1}});
+BENCHMARK(BM_VerticalQueryBatch)->ArgsProduct({{0, 1}, {0, 1, 2}});
 
 // The kernel call alone (no SurfaceHit conversion, no layer count).
 void BM_KernelLineQuery(benchmark::State& state) {

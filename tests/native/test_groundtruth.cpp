@@ -45,7 +45,7 @@ TEST(GroundTruth, VerticalQueryMatchesExplicitTubes) {
     std::uniform_real_distribution<double> U(0, 1);
     const double r = sc.surface.params().r;
     long n = 0, agree = 0, edge = 0, layers_ok = 0, layers_n = 0;
-    long b_agree = 0, b_layers_ok = 0;  // the same for query_batch (AVX-512 where the CPU has it)
+    long b_agree = 0, b_layers_ok = 0;  // the same for query_batch (its widest vector path here)
     std::vector<double> zerr, nerr, naive_zerr, naive_nerr, b_zerr, b_nerr;
     constexpr int kPoints = 4000;
     std::vector<double> xs(kPoints), ys(kPoints);
@@ -127,7 +127,7 @@ TEST(GroundTruth, VerticalQueryMatchesExplicitTubes) {
     std::snprintf(buf, sizeof buf,
                   "vertical %-20s query_batch (%s): agree %.3f%% | z/r mean %.5f max %.4f | normal deg mean %.3f "
                   "p95 %.3f max %.2f | layers agree %.1f%%",
-                  np.name.c_str(), sc.surface.batch_uses_simd(KnitSurface::BatchPath::Auto) ? "AVX-512" : "scalar",
+                  np.name.c_str(), KnitSurface::batch_isa_name(sc.surface.batch_isa(KnitSurface::BatchPath::Auto)),
                   100 * b_agreement, Stats::mean(b_zerr), Stats::maxv(b_zerr), Stats::mean(b_nerr),
                   Stats::pct(b_nerr, 0.95), Stats::maxv(b_nerr), 100.0 * double(b_layers_ok) / double(layers_n));
     log_line(buf);

@@ -1,5 +1,5 @@
-// KnitSurface::query_batch: the AVX-512 path against the scalar kernel
-// (query), point for point, and the API around it. The batch's agreement
+// KnitSurface::query_batch: the AVX-512 and AVX2 paths against the scalar
+// kernel (query), point for point, and the API around it. The batch's agreement
 // with the double-precision tube ray casts is in test_groundtruth.cpp
 // (VerticalQueryMatchesExplicitTubes runs both paths).
 #include <gtest/gtest.h>
@@ -34,9 +34,8 @@ double angle_deg(Vec3 a, Vec3 b) {
   return std::acos(std::max(-1.0, std::min(1.0, c))) * 180.0 / 3.14159265358979;
 }
 
-TEST(QueryBatch, SimdPathAgreesWithTheScalarKernel) {
-  if (!KnitSurface::batch_simd_available())
-    GTEST_SKIP() << "this CPU has no AVX-512: query_batch runs the scalar kernel here, nothing to compare";
+// The vector path `path` (which must run here as `isa`) against query().
+void check_agreement(KnitSurface::BatchPath path, KnitSurface::BatchIsa isa) {
   for (const Named& np : loop_patterns()) {
     // the default stitch, a thinner tube (gaps between the yarns), and a
     // short, deep stitch with a thin yarn (steep in depth)
@@ -49,7 +48,7 @@ TEST(QueryBatch, SimdPathAgreesWithTheScalarKernel) {
     for (const StitchParams& sp : {StitchParams{}, thin, deep}) {
       const float r = sp.r;
       const KnitSurface s(np.pattern, sp);
-      ASSERT_TRUE(s.batch_uses_simd(KnitSurface::BatchPath::Auto)) << np.name;
+      ASSERT_TRUE(s.batch_isa(path) == isa) << np.name;
       // points over a wide window, negative coordinates included, and an odd
       // count (a partial vector and a partial block at the end)
       const int n = 40001;
@@ -61,7 +60,7 @@ TEST(QueryBatch, SimdPathAgreesWithTheScalarKernel) {
         y[size_t(i)] = U(rng);
       }
       std::vector<SurfaceHit> b(n);
-      s.query_batch(x.data(), y.data(), size_t(n), b.data(), KnitSurface::BatchPath::Simd);
+      s.query_batch(x.data(), y.data(), size_t(n), b.data(), path);
       long hit_diff = 0, layer_diff = 0, cell_diff = 0, both = 0, far_z = 0;
       double zmax = 0, zsum = 0, nmax = 0, tmax = 0;
       std::vector<double> nerr;
@@ -85,10 +84,10 @@ TEST(QueryBatch, SimdPathAgreesWithTheScalarKernel) {
       }
       std::sort(nerr.begin(), nerr.end());
       const double n9999 = nerr[size_t(0.9999 * double(nerr.size() - 1))];
-      std::printf("batch vs scalar %-12s a %.1f h %.1f d %+.1f r %.2f: %d points, %ld hits | hit differ %ld, layers differ %ld, cell "
+      std::printf("%s batch vs scalar %-12s a %.1f h %.1f d %+.1f r %.2f: %d points, %ld hits | hit differ %ld, layers differ %ld, cell "
                   "differs %ld | z/r mean %.2e max %.2e (%ld over 0.01) | normal 99.99%% %.3f max %.3f deg, tangent "
                   "max %.3f deg\n",
-                  np.name, double(sp.a), double(sp.h), double(sp.d), double(r), n, both, hit_diff, layer_diff, cell_diff, zsum / double(both), zmax, far_z,
+                  KnitSurface::batch_isa_name(isa), np.name, double(sp.a), double(sp.h), double(sp.d), double(r), n, both, hit_diff, layer_diff, cell_diff, zsum / double(both), zmax, far_z,
                   n9999, nmax, tmax);
       // The same search in another order, with fused multiply-adds: hits,
       // layer counts and cells agree but for a point in ten thousand (a
@@ -113,13 +112,35 @@ TEST(QueryBatch, SimdPathAgreesWithTheScalarKernel) {
   }
 }
 
+TEST(QueryBatch, Avx512PathAgreesWithTheScalarKernel) {
+  if (KnitSurface::batch_best_isa() != KnitSurface::BatchIsa::Avx512)
+    GTEST_SKIP() << "this CPU has no AVX-512: the 16-lane path cannot run here (the AVX2 test covers the 8-lane one)";
+  check_agreement(KnitSurface::BatchPath::Simd, KnitSurface::BatchIsa::Avx512);
+}
+
+TEST(QueryBatch, Avx2PathAgreesWithTheScalarKernel) {
+  if (!KnitSurface::batch_simd_available())
+    GTEST_SKIP() << "this CPU has neither AVX-512 nor AVX2 with FMA: query_batch runs the scalar kernel here, "
+                    "nothing to compare";
+  check_agreement(KnitSurface::BatchPath::Avx2, KnitSurface::BatchIsa::Avx2);
+}
+
 TEST(QueryBatch, SlipStitchesAndTheScalarChoiceTakeTheKernel) {
   const KnitSurface floats(test::slip_floats(), StitchParams{});
   EXPECT_FALSE(floats.batch_uses_simd(KnitSurface::BatchPath::Auto));
   EXPECT_THROW(floats.batch_uses_simd(KnitSurface::BatchPath::Simd), std::invalid_argument);
+  EXPECT_THROW(floats.batch_uses_simd(KnitSurface::BatchPath::Avx2), std::invalid_argument);
+  EXPECT_TRUE(floats.batch_isa(KnitSurface::BatchPath::Auto) == KnitSurface::BatchIsa::Scalar);
   const KnitSurface plain(test::seed(), StitchParams{});
   EXPECT_FALSE(plain.batch_uses_simd(KnitSurface::BatchPath::Scalar));
   EXPECT_EQ(plain.batch_uses_simd(KnitSurface::BatchPath::Auto), KnitSurface::batch_simd_available());
+  EXPECT_TRUE(plain.batch_isa(KnitSurface::BatchPath::Auto) == KnitSurface::batch_best_isa());
+  EXPECT_STREQ(KnitSurface::batch_isa_name(KnitSurface::BatchIsa::Avx2), "avx2");
+  if (KnitSurface::batch_simd_available()) {
+    EXPECT_TRUE(plain.batch_isa(KnitSurface::BatchPath::Avx2) == KnitSurface::BatchIsa::Avx2);
+  } else {
+    EXPECT_THROW(plain.batch_isa(KnitSurface::BatchPath::Avx2), std::invalid_argument);
+  }
   // The fallback is the kernel itself: bit for bit.
   std::vector<float> x, y;
   for (int i = 0; i < 300; ++i) {
@@ -152,13 +173,18 @@ TEST(QueryBatch, OddInputsGiveWhatQueryGives) {
     x.push_back(9.99e6f - 0.37f * float(i));
     y.push_back(-9.99e6f + 0.53f * float(i));
   }
-  std::vector<SurfaceHit> b(x.size());
-  s.query_batch(x.data(), y.data(), x.size(), b.data());
-  for (size_t i = 0; i < 7; ++i) {
-    const SurfaceHit a = s.query(x[i], y[i]);
-    EXPECT_EQ(a.hit, b[i].hit) << i;
-    EXPECT_EQ(a.layers, b[i].layers) << i;
-    if (a.hit && b[i].hit) EXPECT_NEAR(a.position.z, b[i].position.z, 0.02f * s.params().r) << i;
+  // every vector path this CPU has (Auto takes the widest)
+  std::vector<KnitSurface::BatchPath> paths = {KnitSurface::BatchPath::Auto};
+  if (KnitSurface::batch_best_isa() == KnitSurface::BatchIsa::Avx512) paths.push_back(KnitSurface::BatchPath::Avx2);
+  for (const KnitSurface::BatchPath path : paths) {
+    SCOPED_TRACE(KnitSurface::batch_isa_name(s.batch_isa(path)));
+    std::vector<SurfaceHit> b(x.size());
+    s.query_batch(x.data(), y.data(), x.size(), b.data(), path);
+    for (size_t i = 0; i < 7; ++i) {
+      const SurfaceHit a = s.query(x[i], y[i]);
+      EXPECT_EQ(a.hit, b[i].hit) << i;
+      EXPECT_EQ(a.layers, b[i].layers) << i;
+      if (a.hit && b[i].hit) EXPECT_NEAR(a.position.z, b[i].position.z, 0.02f * s.params().r) << i;
   }
   for (size_t i = 0; i < 6; ++i) EXPECT_FALSE(b[i].hit) << i;
   EXPECT_TRUE(b[6].hit);
@@ -174,6 +200,8 @@ TEST(QueryBatch, OddInputsGiveWhatQueryGives) {
     EXPECT_GE(h.layers, 1);
   }
   EXPECT_GT(far_hits, 30);  // (68 of the 300: the points fall on a 1-unit grid there)
+  }
+  std::vector<SurfaceHit> b(x.size());
   s.query_batch(x.data(), y.data(), 0, nullptr);  // nothing to do
   EXPECT_THROW(s.query_batch(nullptr, y.data(), 1, b.data()), std::invalid_argument);
 }

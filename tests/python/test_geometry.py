@@ -225,6 +225,14 @@ class ParallelBatchTest(unittest.TestCase):
         for i in self.rows:
             self.assert_rows_equal(q, self.surf.query(self.u[i:i + 1], self.v[i:i + 1]), i)
 
+    def test_query_path(self):
+        # knit and purl only: a vector path where the CPU has one; slip
+        # stitches (codes 2 and 3) always take the scalar kernel
+        self.assertIn(self.surf.query_path, ("avx512", "avx2", "scalar"))
+        slip = knitshade.KnitSurface(knitshade.Pattern.from_rows([[0, 2], [3, 0]]), knitshade.StitchParams())
+        self.assertEqual(slip.query_path, "scalar")
+        print(f"query_path here: {self.surf.query_path}")
+
     def test_capm_on_a_cylinder(self):
         frame = knitshade.CylinderFrame(40.0)
         c = self.surf.capm(self.u, self.v, self.wi, frame=frame)

@@ -103,14 +103,20 @@ class KnitSurface {
   // The first tube surface seen from above at (x, y) (paper's height query).
   SurfaceHit query(float x, float y) const;
   // query() at n points (x[i], y[i]) into out[i]. Auto: 16 points at a time
-  // with AVX-512 where the CPU has it and the pattern has knit and purl
-  // stitches only, the scalar kernel otherwise (src/query_batch.cpp); the
-  // two agree up to float rounding. Simd: that path or std::invalid_argument.
-  enum class BatchPath { Auto, Scalar, Simd };
+  // with AVX-512, or 8 with AVX2 and FMA, where the CPU has them and the
+  // pattern has knit and purl stitches only; the scalar kernel otherwise
+  // (src/query_batch.cpp). The paths agree up to float rounding. Simd: the
+  // widest SIMD path, Avx2: the 8-lane one (for comparisons on a CPU with
+  // AVX-512); either throws std::invalid_argument when it cannot run.
+  enum class BatchPath { Auto, Scalar, Simd, Avx2 };
+  enum class BatchIsa { Scalar, Avx2, Avx512 };
   void query_batch(const float* x, const float* y, size_t n, SurfaceHit* out,
                    BatchPath path = BatchPath::Auto) const;
-  static bool batch_simd_available();        // this CPU and build have the SIMD path
-  bool batch_uses_simd(BatchPath path) const;  // which path query_batch takes (throws as it would)
+  static BatchIsa batch_best_isa();            // the widest SIMD path this CPU and build have
+  static bool batch_simd_available();          // batch_best_isa() != Scalar
+  static const char* batch_isa_name(BatchIsa isa);  // "avx512", "avx2", "scalar"
+  BatchIsa batch_isa(BatchPath path) const;    // which path query_batch takes (throws as it would)
+  bool batch_uses_simd(BatchPath path) const;  // batch_isa(path) != Scalar
   // CAPM (paper Alg. 1, Sec. 4.2/6.1): the ray enters the shell at
   // (x, y, shell_top()) travelling along -wi_local (wi_local.z > 0, pointing
   // to the viewer, in the frame at (x, y)); `frame` bends it (flat if null).
