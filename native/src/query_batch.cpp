@@ -26,7 +26,6 @@
 // pattern; the crossings take the depth signs of the three cells around
 // their piece from KnitSurface::span_bits, one gather each.
 //
-//
 // The same mathematics as the scalar kernel, evaluated in a different
 // order and with fused multiply-adds: results agree with query() up to float
 // rounding, not bit for bit (tests/native/test_query_batch.cpp bounds the
