@@ -125,6 +125,45 @@ TEST(QueryBatch, Avx2PathAgreesWithTheScalarKernel) {
   check_agreement(KnitSurface::BatchPath::Avx2, KnitSurface::BatchIsa::Avx2);
 }
 
+// The vector paths keep the constants of the last stitch (a and h) between
+// calls: calls alternating between two stitches must each get their own.
+TEST(QueryBatch, AlternatingStitchesKeepTheirOwnConstants) {
+  if (!KnitSurface::batch_simd_available())
+    GTEST_SKIP() << "this CPU has neither AVX-512 nor AVX2 with FMA: no vector path to check";
+  StitchParams other;
+  other.a = 1.2f;
+  other.h = 3.6f;
+  other.r = 0.35f;
+  const KnitSurface sa(test::seed(), StitchParams{}), sb(test::seed(), other);
+  std::vector<float> x, y;
+  for (int i = 0; i < 2000; ++i) {
+    x.push_back(0.731f * float(i % 97) - 30.0f);
+    y.push_back(0.413f * float(i / 97) * 4.0f - 10.0f);
+  }
+  const size_t n = x.size();
+  std::vector<KnitSurface::BatchPath> paths = {KnitSurface::BatchPath::Simd};
+  if (KnitSurface::batch_best_isa() == KnitSurface::BatchIsa::Avx512) paths.push_back(KnitSurface::BatchPath::Avx2);
+  for (const KnitSurface::BatchPath path : paths) {
+    SCOPED_TRACE(KnitSurface::batch_isa_name(sa.batch_isa(path)));
+    std::vector<SurfaceHit> a1(n), b1(n), a2(n);
+    sa.query_batch(x.data(), y.data(), n, a1.data(), path);
+    sb.query_batch(x.data(), y.data(), n, b1.data(), path);
+    sa.query_batch(x.data(), y.data(), n, a2.data(), path);
+    long b_agree = 0, differ_ab = 0;
+    for (size_t i = 0; i < n; ++i) {
+      ASSERT_EQ(a1[i].hit, a2[i].hit) << i;
+      ASSERT_EQ(a1[i].position.z, a2[i].position.z) << i;
+      ASSERT_EQ(a1[i].layers, a2[i].layers) << i;
+      const SurfaceHit q = sb.query(x[i], y[i]);
+      if (q.hit == b1[i].hit && q.layers == b1[i].layers && (!q.hit || std::abs(q.position.z - b1[i].position.z) < 1e-3f))
+        ++b_agree;
+      if (a1[i].hit != b1[i].hit || (a1[i].hit && a1[i].position.z != b1[i].position.z)) ++differ_ab;
+    }
+    EXPECT_GE(b_agree, long(n) - 2);           // the second stitch's results are its own
+    EXPECT_GT(differ_ab, long(n) / 2);         // and the two stitches do differ
+  }
+}
+
 TEST(QueryBatch, SlipStitchesAndTheScalarChoiceTakeTheKernel) {
   const KnitSurface floats(test::slip_floats(), StitchParams{});
   EXPECT_FALSE(floats.batch_uses_simd(KnitSurface::BatchPath::Auto));
