@@ -85,6 +85,33 @@ void BM_VerticalQueryBatch(benchmark::State& state) {
 }
 BENCHMARK(BM_VerticalQueryBatch)->ArgsProduct({{0, 1}, {0, 1, 2}});
 
+// Small calls (the first argument is the points per call, as Python's
+// query of a few points makes them): the vector paths' fixed cost per call
+// against the scalar kernel's. Second argument as above; ns per point.
+void BM_VerticalQueryBatchSmall(benchmark::State& state) {
+  KnitSurface s(test::stockinette(), StitchParams{});
+  Pts p = random_points(s, 4096, 1);
+  const int n = int(state.range(0));
+  const auto path = state.range(1) == 1   ? KnitSurface::BatchPath::Scalar
+                    : state.range(1) == 2 ? KnitSurface::BatchPath::Avx2
+                                          : KnitSurface::BatchPath::Auto;
+  if (path == KnitSurface::BatchPath::Avx2 && !KnitSurface::batch_simd_available()) {
+    state.SkipWithError("this CPU has no AVX2 with FMA");
+    return;
+  }
+  std::vector<SurfaceHit> out(static_cast<size_t>(n));
+  size_t i = 0;
+  for (auto _ : state) {
+    s.query_batch(p.x.data() + i, p.y.data() + i, size_t(n), out.data(), path);
+    benchmark::DoNotOptimize(out.data());
+    i = (i + size_t(n)) % (4096 - 64);
+  }
+  state.counters["ns/pt"] = benchmark::Counter(double(n) * double(state.iterations()),
+                                               benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.SetLabel(KnitSurface::batch_isa_name(s.batch_isa(path)));
+}
+BENCHMARK(BM_VerticalQueryBatchSmall)->ArgsProduct({{1, 2, 4, 16}, {0, 1, 2}});
+
 // The kernel call alone (no SurfaceHit conversion, no layer count).
 void BM_KernelLineQuery(benchmark::State& state) {
   KnitSurface s(test::stockinette(), StitchParams{});
