@@ -155,12 +155,13 @@ TEST(QueryBatch, AlternatingStitchesKeepTheirOwnConstants) {
       ASSERT_EQ(a1[i].position.z, a2[i].position.z) << i;
       ASSERT_EQ(a1[i].layers, a2[i].layers) << i;
       const SurfaceHit q = sb.query(x[i], y[i]);
-      if (q.hit == b1[i].hit && q.layers == b1[i].layers && (!q.hit || std::abs(q.position.z - b1[i].position.z) < 1e-3f))
+      if (q.hit == b1[i].hit && q.layers == b1[i].layers &&
+          (!q.hit || std::abs(q.position.z - b1[i].position.z) < 1e-3f))
         ++b_agree;
       if (a1[i].hit != b1[i].hit || (a1[i].hit && a1[i].position.z != b1[i].position.z)) ++differ_ab;
     }
-    EXPECT_GE(b_agree, long(n) - 2);           // the second stitch's results are its own
-    EXPECT_GT(differ_ab, long(n) / 2);         // and the two stitches do differ
+    EXPECT_GE(b_agree, long(n) - 2);    // the second stitch's results are its own
+    EXPECT_GT(differ_ab, long(n) / 2);  // and the two stitches do differ
   }
 }
 
