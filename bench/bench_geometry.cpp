@@ -56,6 +56,20 @@ void BM_VerticalQuery(benchmark::State& state) {
 }
 BENCHMARK(BM_VerticalQuery)->Arg(0)->Arg(1);
 
+// The path a batch benchmark's second argument names: 0 the widest the CPU
+// has (Auto), 1 the scalar kernel, 2 AVX2. False (and the benchmark skipped
+// with the reason) when this CPU cannot run it.
+bool batch_path_arg(benchmark::State& state, KnitSurface::BatchPath& path) {
+  path = state.range(1) == 1   ? KnitSurface::BatchPath::Scalar
+         : state.range(1) == 2 ? KnitSurface::BatchPath::Avx2
+                               : KnitSurface::BatchPath::Auto;
+  if (path == KnitSurface::BatchPath::Avx2 && !KnitSurface::batch_simd_available()) {
+    state.SkipWithError("this CPU has no AVX2 with FMA");
+    return false;
+  }
+  return true;
+}
+
 // The same queries through KnitSurface::query_batch, 4096 points per call
 // (AVX-512, 16 points at a time, or AVX2, 8 at a time, whichever the CPU
 // has: the label says which path ran). A second argument of 1 forces the
@@ -65,13 +79,8 @@ void BM_VerticalQueryBatch(benchmark::State& state) {
   KnitSurface s(pat, StitchParams{});
   Pts p = random_points(s, 4096, 1);
   std::vector<SurfaceHit> out(4096);
-  const auto path = state.range(1) == 1   ? KnitSurface::BatchPath::Scalar
-                    : state.range(1) == 2 ? KnitSurface::BatchPath::Avx2
-                                          : KnitSurface::BatchPath::Auto;
-  if (path == KnitSurface::BatchPath::Avx2 && !KnitSurface::batch_simd_available()) {
-    state.SkipWithError("this CPU has no AVX2 with FMA");
-    return;
-  }
+  KnitSurface::BatchPath path;
+  if (!batch_path_arg(state, path)) return;
   long hits = 0;
   for (auto _ : state) {
     s.query_batch(p.x.data(), p.y.data(), 4096, out.data(), path);
@@ -92,13 +101,8 @@ void BM_VerticalQueryBatchSmall(benchmark::State& state) {
   KnitSurface s(test::stockinette(), StitchParams{});
   Pts p = random_points(s, 4096, 1);
   const int n = int(state.range(0));
-  const auto path = state.range(1) == 1   ? KnitSurface::BatchPath::Scalar
-                    : state.range(1) == 2 ? KnitSurface::BatchPath::Avx2
-                                          : KnitSurface::BatchPath::Auto;
-  if (path == KnitSurface::BatchPath::Avx2 && !KnitSurface::batch_simd_available()) {
-    state.SkipWithError("this CPU has no AVX2 with FMA");
-    return;
-  }
+  KnitSurface::BatchPath path;
+  if (!batch_path_arg(state, path)) return;
   std::vector<SurfaceHit> out(static_cast<size_t>(n));
   size_t i = 0;
   for (auto _ : state) {
