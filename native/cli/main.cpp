@@ -8,6 +8,9 @@
 
 #include "cli.h"
 #include "knit/version.h"
+#ifdef KNIT_HAVE_RENDER
+#include "render/build_info.h"
+#endif
 
 namespace knit::cli {
 
@@ -41,7 +44,12 @@ int main(int argc, char** argv) {
   }
   std::string name = argv[1];
   if (name == "--version") {
+    // The version, then what a bug report needs: the compiler, the vector
+    // path this CPU takes, the libraries' versions.
     std::printf("knitshade %s\n", knit::version());
+#ifdef KNIT_HAVE_RENDER
+    for (const auto& [key, value] : knit::render::build_info()) std::printf("  %-14s %s\n", key.c_str(), value.c_str());
+#endif
     return 0;
   }
   for (const Command& c : registry()) {

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
+#include "knit/surface.h"
 #include "render_test_util.h"
 
 namespace knit::render {
@@ -43,6 +44,21 @@ std::string small_scene(const std::string& material = R"({"type": "diffuse", "al
     "materials": {"m": )" + material + R"(},
     "objects": [{"mesh": ")" + test::mesh("quad.obj") + R"(", "material": "m", "transform": {"rotate": [-60, 0, 0], "scale": 2}}]
   })";
+}
+
+// --version: the version line, then the compiler, the batched query's
+// vector path on this CPU and the libraries' versions, one per line.
+TEST(Cli, VersionNamesThePathAndTheLibraries) {
+  const std::string dir = test::test_dir();
+  const CliRun r = run(dir, "--version");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.out.rfind("knitshade ", 0), 0u) << r.out;
+  const std::string isa = KnitSurface::batch_isa_name(KnitSurface::batch_best_isa());
+  EXPECT_NE(r.out.find("batched query  " + isa + " ("), std::string::npos) << r.out;
+  for (const char* lib : {"compiler", "Embree         3.", "OpenImageIO    2.", "OpenColorIO    2.", "oneTBB"})
+    EXPECT_NE(r.out.find(lib), std::string::npos) << lib << " in\n" << r.out;
+  EXPECT_EQ(lines(r.out), 7) << r.out;
+  EXPECT_TRUE(r.err.empty()) << r.err;
 }
 
 TEST(Cli, RendersPngAndExrWithAReport) {

@@ -1,0 +1,52 @@
+#include "render/build_info.h"
+
+#include <OpenColorIO/OpenColorIO.h>
+#include <OpenImageIO/imageio.h>
+#include <embree3/rtcore.h>
+#include <oneapi/tbb/version.h>
+
+#include <cstdio>
+
+#include "knit/surface.h"
+
+namespace knit::render {
+
+namespace {
+
+// OpenImageIO's run-time version, 10000 major + 100 minor + patch.
+std::string oiio_version() {
+  const int v = OIIO::openimageio_version();
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%d.%d.%d", v / 10000, (v / 100) % 100, v % 100);
+  return buf;
+}
+
+std::string compiler() {
+#if defined(__clang__)
+  return std::string("Clang ") + __clang_version__;
+#elif defined(__GNUC__)
+  return std::string("GCC ") + __VERSION__;
+#else
+  return "unknown";
+#endif
+}
+
+}  // namespace
+
+std::vector<std::pair<std::string, std::string>> build_info() {
+  const KnitSurface::BatchIsa isa = KnitSurface::batch_best_isa();
+  std::string batch = KnitSurface::batch_isa_name(isa);
+  batch += isa == KnitSurface::BatchIsa::Avx512 ? " (16 points at a time)"
+           : isa == KnitSurface::BatchIsa::Avx2 ? " (8 points at a time)"
+                                                 : " (no AVX2 with FMA on this CPU: one point at a time)";
+  return {
+      {"compiler", compiler()},
+      {"batched query", batch},
+      {"Embree", RTC_VERSION_STRING},
+      {"OpenImageIO", oiio_version()},
+      {"OpenColorIO", OCIO_NAMESPACE::GetVersion()},
+      {"oneTBB", TBB_runtime_version()},
+  };
+}
+
+}  // namespace knit::render
