@@ -21,6 +21,18 @@ std::string oiio_version() {
   return buf;
 }
 
+// Embree's run-time version, from a device (the header's when none can be made).
+std::string embree_version() {
+  RTCDevice device = rtcNewDevice(nullptr);
+  if (!device) return RTC_VERSION_STRING;
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%d.%d.%d", int(rtcGetDeviceProperty(device, RTC_DEVICE_PROPERTY_VERSION_MAJOR)),
+                int(rtcGetDeviceProperty(device, RTC_DEVICE_PROPERTY_VERSION_MINOR)),
+                int(rtcGetDeviceProperty(device, RTC_DEVICE_PROPERTY_VERSION_PATCH)));
+  rtcReleaseDevice(device);
+  return buf;
+}
+
 std::string compiler() {
 #if defined(__clang__)
   return std::string("Clang ") + __clang_version__;
@@ -42,7 +54,7 @@ std::vector<std::pair<std::string, std::string>> build_info() {
   return {
       {"compiler", compiler()},
       {"batched query", batch},
-      {"Embree", RTC_VERSION_STRING},
+      {"Embree", embree_version()},
       {"OpenImageIO", oiio_version()},
       {"OpenColorIO", OCIO_NAMESPACE::GetVersion()},
       {"oneTBB", TBB_runtime_version()},
