@@ -67,16 +67,14 @@ void query_scalar(const KnitSurface& s, const float* x, const float* y, size_t n
 #if KNIT_HAVE_SIMD_PATHS
 
 // (the instruction sets of the target pragmas below)
-bool cpu_has_avx512() {
-  static const bool ok = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
-                         __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
-                         __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2") &&
-                         __builtin_cpu_supports("popcnt");
-  return ok;
-}
 bool cpu_has_avx2() {
   static const bool ok =
       __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("popcnt");
+  return ok;
+}
+bool cpu_has_avx512() {
+  static const bool ok = cpu_has_avx2() && __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+                         __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2");
   return ok;
 }
 
@@ -179,8 +177,6 @@ KnitSurface::BatchIsa KnitSurface::batch_isa(BatchPath path) const {
   // (a CPU with AVX-512 has AVX2)
   return path == BatchPath::Avx2 ? BatchIsa::Avx2 : best;
 }
-
-bool KnitSurface::batch_uses_simd(BatchPath path) const { return batch_isa(path) != BatchIsa::Scalar; }
 
 void KnitSurface::query_batch(const float* x, const float* y, size_t n, SurfaceHit* out, BatchPath path) const {
   if (n == 0) return;

@@ -167,13 +167,13 @@ TEST(QueryBatch, AlternatingStitchesKeepTheirOwnConstants) {
 
 TEST(QueryBatch, SlipStitchesAndTheScalarChoiceTakeTheKernel) {
   const KnitSurface floats(test::slip_floats(), StitchParams{});
-  EXPECT_FALSE(floats.batch_uses_simd(KnitSurface::BatchPath::Auto));
-  EXPECT_THROW(floats.batch_uses_simd(KnitSurface::BatchPath::Simd), std::invalid_argument);
-  EXPECT_THROW(floats.batch_uses_simd(KnitSurface::BatchPath::Avx2), std::invalid_argument);
   EXPECT_TRUE(floats.batch_isa(KnitSurface::BatchPath::Auto) == KnitSurface::BatchIsa::Scalar);
+  EXPECT_THROW(floats.batch_isa(KnitSurface::BatchPath::Simd), std::invalid_argument);
+  EXPECT_THROW(floats.batch_isa(KnitSurface::BatchPath::Avx2), std::invalid_argument);
   const KnitSurface plain(test::seed(), StitchParams{});
-  EXPECT_FALSE(plain.batch_uses_simd(KnitSurface::BatchPath::Scalar));
-  EXPECT_EQ(plain.batch_uses_simd(KnitSurface::BatchPath::Auto), KnitSurface::batch_simd_available());
+  EXPECT_TRUE(plain.batch_isa(KnitSurface::BatchPath::Scalar) == KnitSurface::BatchIsa::Scalar);
+  EXPECT_EQ(plain.batch_isa(KnitSurface::BatchPath::Auto) != KnitSurface::BatchIsa::Scalar,
+            KnitSurface::batch_simd_available());
   EXPECT_TRUE(plain.batch_isa(KnitSurface::BatchPath::Auto) == KnitSurface::batch_best_isa());
   EXPECT_STREQ(KnitSurface::batch_isa_name(KnitSurface::BatchIsa::Avx2), "avx2");
   if (KnitSurface::batch_simd_available()) {

@@ -116,7 +116,6 @@ class KnitSurface {
   static bool batch_simd_available();          // batch_best_isa() != Scalar
   static const char* batch_isa_name(BatchIsa isa);  // "avx512", "avx2", "scalar"
   BatchIsa batch_isa(BatchPath path) const;    // which path query_batch takes (throws as it would)
-  bool batch_uses_simd(BatchPath path) const;  // batch_isa(path) != Scalar
   // CAPM (paper Alg. 1, Sec. 4.2/6.1): the ray enters the shell at
   // (x, y, shell_top()) travelling along -wi_local (wi_local.z > 0, pointing
   // to the viewer, in the frame at (x, y)); `frame` bends it (flat if null).
