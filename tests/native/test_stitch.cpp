@@ -167,14 +167,16 @@ TEST(Stitch, LoopInterpolantXYIsTheFullInterpolantsXY) {
   }
 }
 
-// The chord bound that lets vertical queries skip the cubic: never above
-// the interpolant's true distance in x and y (double precision, 2001
-// points), and close enough to reject most far pieces.
-TEST(Stitch, QuadDistanceBoundIsALowerBound) {
+// The bounds that let vertical queries skip the cubic (knit_quad_beyond):
+// a piece is never called farther than m when the interpolant's true
+// distance in x and y (double precision, 2001 points) is within m, and the
+// bounds reject most pieces beyond m. The one-sided bound rejects pieces the
+// chord bound alone keeps.
+TEST(Stitch, QuadBeyondIsSureOfItsPieces) {
   KnitSurface s = make(test::seed());
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> U(0.0f, 1.0f);
-  int far = 0, rejected = 0;
+  int far = 0, rejected = 0, by_chord = 0;
   for (int i = 0; i < 20000; ++i) {
     const int row = static_cast<int>(U(rng) * 12) - 4, gp = static_cast<int>(U(rng) * 96) - 16;
     const k::KRow rw = k::knit_row(s.geom(), row);
@@ -186,16 +188,26 @@ TEST(Stitch, QuadDistanceBoundIsALowerBound) {
       const double x = q.q0.x + (q.q1.x + double(q.q2.x) * u) * u, y = q.q0.y + (q.q1.y + double(q.q2.y) * u) * u;
       best = std::min(best, std::hypot(x - px, y - py));
     }
-    const float bound = k::knit_quad_xy_distance_bound(q, px, py);
-    ASSERT_LE(bound, best + 1e-4) << "row " << row << " piece " << gp << " at (" << px << ", " << py << ")";
-    if (best > 1.5) {
-      ++far;
-      if (bound > 1.0) ++rejected;
+    for (const float m : {0.25f, 0.5f, 1.0f, 1.5f}) {
+      const bool beyond = k::knit_quad_xy_beyond(q, px, py, m) != 0;
+      const k::kvec3 A = k::kv3(q.q0.x - px, q.q0.y - py, 0), B = k::kv3(q.q1.x, q.q1.y, 0),
+                     C = k::kv3(q.q2.x, q.q2.y, 0);
+      const bool chord = k::knit_quad_beyond(A, B, C, m, 0) != 0;
+      ASSERT_TRUE(!beyond || best > m - 1e-4)
+          << "row " << row << " piece " << gp << " at (" << px << ", " << py << "), m " << m << ": distance " << best;
+      ASSERT_TRUE(!chord || beyond) << "the one-sided test only adds rejections";
+      if (m == 1.0f && best > 1.0) {
+        ++far;
+        rejected += beyond;
+        by_chord += chord;
+      }
     }
   }
-  std::printf("[ bound ] pieces farther than 1.5: %d, bound over 1.0 for %d (%.0f%%)\n", far, rejected,
-              100.0 * rejected / far);
+  std::printf("[ bound ] pieces farther than 1.0: %d, found beyond 1.0: %d (%.1f%%), by the chord alone %d (%.1f%%)\n",
+              far, rejected, 100.0 * rejected / far, by_chord, 100.0 * by_chord / far);
   EXPECT_GT(rejected, far * 3 / 4);
+  // the one-sided bound catches over a quarter of the pieces the chord misses
+  EXPECT_LT(far - rejected, (far - by_chord) * 3 / 4);
 }
 
 TEST(Stitch, ShellTopBoundsEveryTube) {
