@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 #include "groundtruth.h"
 #include "test_patterns.h"
@@ -144,7 +145,7 @@ TEST(GroundTruth, VerticalQueryMatchesExplicitTubes) {
 }
 
 void run_capm(double radius, const CapmOptions& opt, const char* label, int rays_per_angle,
-              double min_agreement, double max_mean_normal_deg) {
+              double min_agreement, double max_mean_normal_deg, double max_far_fraction = 1.0) {
   Stats all;
   for (const NamedPattern& np : groundtruth_patterns()) {
     GroundTruthScene sc(np.pattern, StitchParams{}, radius, radius > 0 ? 30 : 45);
@@ -166,10 +167,17 @@ void run_capm(double radius, const CapmOptions& opt, const char* label, int rays
     all.merge(per_pattern);
   }
   log_line(std::string(label) + " ALL " + all.line());
+  // Entries more than 0.01 r from the tubes' (besides edge rays): what is
+  // left are grazing rays the model sees touch a tube within float
+  // rounding of its surface and the ray casts see pass it.
+  EXPECT_LE(double(Stats::over(all.pos_err, 0.01)), max_far_fraction * double(all.pos_err.size())) << label;
 }
 
 TEST(GroundTruth, CapmFlatMatchesExplicitTubes) {
-  run_capm(0, CapmOptions{}, "capm-flat", 1500, 0.99, 2.0);
+  // Over 0.01 r: 0.05% of the hits at most (23 of 46,000). With at most
+  // five Newton steps per entry search (KNIT_NEWTON_EXTREME before
+  // 2026-11-23) it was 0.25%.
+  run_capm(0, CapmOptions{}, "capm-flat", 1500, 0.99, 2.0, 0.0005);
 }
 
 // A sleeve-like cylinder: radius 80 pattern units, about 80 stitches around.
@@ -312,25 +320,36 @@ TEST(GroundTruth, RefinedCorrectorAgreesWithTheRequeriedSegment) {
       const k::KnitLineHit& want = again.state == KNIT_CAPM_HIT ? again.hit : st.hit;
       if (refined.hit.row != want.row || refined.hit.col != want.col) continue;
       ++same_tube;
-      // That tube's converged entry along the re-queried ray.
+      // That tube's entry along the re-queried ray, found without a search:
+      // the smallest s - w over the curve parameters (steps of 2.5e-4) where
+      // the line is inside the tube, on the stretch inside it around the
+      // re-queried and the refined entries (the same crossing).
       const k::KSpan sp = k::knit_span(g, s.codes(), k::knit_row(g, want.row), k::knit_column_of(want.t));
-      k::KnitLineHit conv = want;
-      for (int it = 0; it < 8; ++it) {
-        const k::KnitLineHit next = k::knit_crossing(g, s.codes(), s.colors(), sp, before.p, D, conv.t, 0, -K_BIG);
-        if (!next.hit) break;
-        conv = next;
-      }
-      refined_close += k::kv3_len(k::kv3_sub(refined.hit.p, conv.p)) < 0.01f * g.r;
-      requery_close += k::kv3_len(k::kv3_sub(want.p, conv.p)) < 0.01f * g.r;
+      const auto entry_at = [&](double t) {  // s - w at t, or nothing outside the tube
+        const k::KLineRel lr = k::knit_line_rel(k::knit_span_curve_at(g, s.codes(), sp, float(t)), before.p, D);
+        const double r2 = double(g.r) * g.r;
+        return lr.rho2 < r2 ? std::optional<double>(lr.s - std::sqrt(r2 - double(lr.rho2))) : std::nullopt;
+      };
+      double best_s = K_BIG;
+      for (const double t0 : {double(want.t), double(refined.hit.t)})
+        for (const double dir : {-1.0, 1.0})
+          for (int j = 0; j < 12000; ++j) {
+            const auto e = entry_at(t0 + dir * 2.5e-4 * j);
+            if (!e) break;
+            best_s = std::min(best_s, *e);
+          }
+      const k::kvec3 conv = k::kv3_madd(before.p, D, float(best_s));
+      refined_close += k::kv3_len(k::kv3_sub(refined.hit.p, conv)) < 0.01f * g.r;
+      requery_close += k::kv3_len(k::kv3_sub(want.p, conv)) < 0.01f * g.r;
     }
     std::printf("[ corrector ] R = %.0f: %d first-segment hits; refined on the re-queried tube %d; entry within "
-                "0.01 r of the converged one: refined %d, re-queried %d\n",
+                "0.01 r of the sampled one: refined %d, re-queried %d\n",
                 R, hits, same_tube, refined_close, requery_close);
     EXPECT_GT(hits, n / 3) << "R = " << R;
     EXPECT_GE(same_tube, hits * 998 / 1000) << "R = " << R;
     EXPECT_GE(refined_close, same_tube * 99 / 100) << "R = " << R;
     EXPECT_GE(refined_close, requery_close) << "R = " << R;
-    // The line query's own entry search converges too (KNIT_NEWTON_EXTREME).
+    // The line query's own entry search finds it too (KNIT_NEWTON_EXTREME).
     EXPECT_GE(requery_close, same_tube * 99 / 100) << "R = " << R;
   }
 }

@@ -117,6 +117,9 @@ struct Stats {
   static double maxv(const std::vector<double>& v) {
     return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end());
   }
+  static long over(const std::vector<double>& v, double x) {
+    return long(std::count_if(v.begin(), v.end(), [x](double e) { return e > x; }));
+  }
   void merge(const Stats& o) {
     rays += o.rays;
     edge += o.edge;
@@ -135,9 +138,9 @@ struct Stats {
     char buf[512];
     std::snprintf(buf, sizeof buf,
                   "rays %5ld edge %4ld agree %7.3f%% (model-only %ld, truth-only %ld) | pos/r mean %.4f "
-                  "p95 %.4f max %.3f | normal deg mean %.3f p95 %.3f max %.2f | steps mean %.2f max %d",
+                  "p95 %.4f max %.3f, over 0.01 r %ld | normal deg mean %.3f p95 %.3f max %.2f | steps mean %.2f max %d",
                   rays, edge, 100 * agreement(), model_only, truth_only, mean(pos_err), pct(pos_err, 0.95),
-                  maxv(pos_err), mean(normal_err), pct(normal_err, 0.95), maxv(normal_err),
+                  maxv(pos_err), over(pos_err, 0.01), mean(normal_err), pct(normal_err, 0.95), maxv(normal_err),
                   steps_n ? double(steps_sum) / double(steps_n) : 0.0, steps_max);
     return buf;
   }
