@@ -241,6 +241,7 @@ KNIT_FN KExtreme knit_newton_extreme(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes)
   KExtreme e;
   float r2 = g.r * g.r;
   int i;
+  float t_prev = KF(0.0), f1_prev = KF(0.0); /* the last accepted point before this one */
   e.t = t_start;
   e.capped = 0;
   e.cv = knit_span_curve_at(g, codes, sp, e.t);
@@ -261,7 +262,15 @@ KNIT_FN KExtreme knit_newton_extreme(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes)
     if (f2 < KF(0.0)) step = -f1 / f2;
     else step = f1 * KF(0.05);  /* not concave here: small uphill step */
     step = k_clampf(step, KF(-0.25), KF(0.25));
+    /* Within 0.05 r of the tube's edge w's square root makes f'' grow
+     * faster than f', and Newton's step can fall below the tolerance far
+     * from the maximum. When f' has changed sign since the last point, the
+     * maximum lies between the two: bisect instead of stopping. */
+    if (k_fabs(step) < KF(1.0e-4) && i > 0 && w < KF(0.05) * g.r && (f1 < KF(0.0)) != (f1_prev < KF(0.0)))
+      step = KF(0.5) * (t_prev - e.t);
     if (k_fabs(step) < KF(1.0e-4)) break;
+    t_prev = e.t;
+    f1_prev = f1;
     for (tries = 0; tries < 4 && moved == 0; tries++) {
       KCurve nc = knit_span_curve_at(g, codes, sp, e.t + step);
       KLineRel nl = knit_line_rel(nc, o, D);
