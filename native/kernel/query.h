@@ -262,10 +262,11 @@ KNIT_FN KExtreme knit_newton_extreme(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes)
     if (f2 < KF(0.0)) step = -f1 / f2;
     else step = f1 * KF(0.05);  /* not concave here: small uphill step */
     step = k_clampf(step, KF(-0.25), KF(0.25));
-    /* Within 0.05 r of the tube's edge w's square root makes f'' grow
-     * faster than f', and Newton's step can fall below the tolerance far
-     * from the maximum. When f' has changed sign since the last point, the
-     * maximum lies between the two: bisect instead of stopping. */
+    /* At the tube's edge (w < 0.05 r: rho within 0.13% of r) w's square
+     * root makes f'' grow faster than f', and Newton's step can fall below
+     * the tolerance far from the maximum. When f' has changed sign since
+     * the last point, the maximum lies between the two: bisect instead of
+     * stopping. */
     if (k_fabs(step) < KF(1.0e-4) && i > 0 && w < KF(0.05) * g.r && (f1 < KF(0.0)) != (f1_prev < KF(0.0)))
       step = KF(0.5) * (t_prev - e.t);
     if (k_fabs(step) < KF(1.0e-4)) break;
