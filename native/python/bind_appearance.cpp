@@ -543,7 +543,8 @@ const char* mode_name(KnitMode m) {
 
 KnitMaterial make_material(const Pattern& pattern, const StitchParams& stitch, ::py::object bsdf,
                            ::py::object ply, const std::string& mode, bool capm, bool ply_detail,
-                           int footprint_points, bool footprint_table, bool self_shadowing, double uv_scale,
+                           int footprint_points, bool footprint_table, bool self_shadowing,
+                           bool near_field_below_cell, double uv_scale,
                            int max_steps, double max_segment, double max_bend) {
   KnitMaterialParams mp;
   mp.stitch = stitch;
@@ -583,6 +584,7 @@ KnitMaterial make_material(const Pattern& pattern, const StitchParams& stitch, :
   mp.footprint_points = footprint_points;
   mp.footprint_table = footprint_table;
   mp.self_shadowing = self_shadowing;
+  mp.near_field_below_cell = near_field_below_cell;
   mp.uv_scale = float(uv_scale);
   mp.capm_options.max_steps = max_steps;
   mp.capm_options.max_segment = float(max_segment);
@@ -1083,8 +1085,8 @@ return the shading point (knit/shading.h).
 
 KnitMaterial(pattern, stitch=StitchParams(), bsdf=None, ply=None,
 mode='near_field', capm=True, ply_detail=True, footprint_points=4,
-footprint_table=True, self_shadowing=True, uv_scale=40.0, max_steps=32,
-max_segment=6.2832, max_bend=0.05)
+footprint_table=True, self_shadowing=True, near_field_below_cell=True,
+uv_scale=40.0, max_steps=32, max_segment=6.2832, max_bend=0.05)
 
 bsdf: a YarnBSDF or a dict of its keyword arguments (None: defaults); it
 needs a colour for every colour index the pattern uses. ply: a PlyProfile or
@@ -1095,7 +1097,10 @@ stitch cell or more are aggregated from a per-class table built here
 (docs/multiscale.md) instead of CAPM marches (not for patterns with slip
 stitches). self_shadowing: near field, light and bounced rays from a yarn
 hit cross the rest of the yarn shell (KnitMaterial.occluded_from,
-shade_from) before they leave it. capm=False: no parallax, the
+shade_from) before they leave it. near_field_below_cell: a multi-scale
+footprint below a stitch cell in either direction is shaded as the near
+field at the hit (KnitMaterial.near_field_at); False: the marched
+aggregate of its points. capm=False: no parallax, the
 height query at the hit's (u, v). uv_scale: pattern units per UV unit. max_steps, max_segment,
 max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
   knit_material
@@ -1103,7 +1108,8 @@ max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
            ::py::kw_only(), ::py::arg("bsdf") = ::py::none(), ::py::arg("ply") = ::py::none(),
            ::py::arg("mode") = "near_field", ::py::arg("capm") = true,
            ::py::arg("ply_detail") = true, ::py::arg("footprint_points") = 4,
-           ::py::arg("footprint_table") = true, ::py::arg("self_shadowing") = true, ::py::arg("uv_scale") = 40.0, ::py::arg("max_steps") = 32,
+           ::py::arg("footprint_table") = true, ::py::arg("self_shadowing") = true,
+           ::py::arg("near_field_below_cell") = true, ::py::arg("uv_scale") = 40.0, ::py::arg("max_steps") = 32,
            ::py::arg("max_segment") = 6.2832, ::py::arg("max_bend") = 0.05)
       .def_property_readonly("pattern",
                              [](const KnitMaterial& km) { return km.surface().pattern(); })
@@ -1125,6 +1131,8 @@ max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
                              [](const KnitMaterial& km) { return km.params().footprint_table; })
       .def_property_readonly("self_shadowing",
                              [](const KnitMaterial& km) { return km.params().self_shadowing; })
+      .def_property_readonly("near_field_below_cell",
+                             [](const KnitMaterial& km) { return km.params().near_field_below_cell; })
       .def_property_readonly("uv_scale",
                              [](const KnitMaterial& km) { return km.params().uv_scale; })
       .def_property_readonly(
@@ -1156,11 +1164,13 @@ specular transmission alpha_x, alpha_y; multi-scale: LEAN-widened), steps
 (CAPM segments marched, summed over footprint points). Rows with
 pass_through have no shading point: st, sb, sn, offset, shadow, kd_r, kd_t,
 alpha are nan, color -1, layers 0, and p_delta 1 (so p_delta equals
-transmittance() in every row).)doc");
+transmittance() in every row). In multi-scale mode, a footprint below a
+stitch cell in either direction is shaded as the near field
+(near_field_below_cell).)doc");
   def_hit_method(knit_material, "transmittance", material_transmittance, R"doc(
 Fraction of light a shadow ray along ray_dir passes through the fabric at N
 base hits, (N,) array: near field 0 or 1 (a yarn or a gap), multi-scale
-p_delta.)doc");
+p_delta (0 or 1 too where near_field_at: footprints below a stitch cell).)doc");
 }
 
 }  // namespace knit::py

@@ -212,6 +212,7 @@ KnitDesc parse_knit_material(JsonObject& o, const std::string& dir, bool class_t
   // (read either way, so that the key is still checked)
   if (!class_tables) mp.footprint_table = false;
   mp.self_shadowing = o.boolean("self_shadowing", mp.self_shadowing);
+  mp.near_field_below_cell = o.boolean("near_field_below_cell", mp.near_field_below_cell);
   if (auto c = o.get("capm_options")) {
     JsonObject co(*c);
     mp.capm_options.max_steps = static_cast<int>(co.integer("max_steps", 1, 4096, mp.capm_options.max_steps));

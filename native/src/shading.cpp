@@ -213,8 +213,16 @@ void KnitMaterial::set_colors(KnitShade& sh, int color_index) const {
   sh.kd_t = params_.bsdf.transmit_colors[size_t(c)];
 }
 
+bool KnitMaterial::near_field_at(const BaseHit& hit) const {
+  if (params_.mode != KnitMode::MultiScale) return true;
+  if (!params_.near_field_below_cell) return false;
+  Vec3 fx, fy;
+  footprint_axes(hit, fx, fy);
+  return k::knit_footprint_stratified(surface_.geom(), fx, fy) == 0;
+}
+
 bool KnitMaterial::uses_shift(const BaseHit& hit) const {
-  if (params_.mode != KnitMode::MultiScale) return false;  // one ray, no footprint points
+  if (near_field_at(hit)) return false;  // one ray, no footprint points
   if (!table_ || !table_->counts_without_points()) return true;
   // From the class table (the same test as shade's) with no points: only a
   // marched footprint reads the shift.
@@ -233,7 +241,7 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
   sh.from_back = wi.z < 0;
   const float top = surface_.shell_top();
 
-  if (params_.mode == KnitMode::MultiScale) {
+  if (!near_field_at(hit)) {
     Vec3 fx, fy;
     footprint_axes(hit, fx, fy);
     const int points = footprint_points_for(fx, fy);
@@ -308,7 +316,8 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     return sh;
   }
 
-  // Near field: one ray, CAPM or (no parallax) the height query at (x, y).
+  // Near field (or a multi-scale footprint below a cell, near_field_at): one
+  // ray, CAPM or (no parallax) the height query at (x, y).
   k::KnitLineHit h;
   if (params_.capm) {
     const k::KnitCapm st = march(hit, ray_dir, frame);
@@ -387,7 +396,7 @@ float KnitMaterial::transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameP
                                   std::array<float, 2> shift) const {
   // Only whether the ray meets yarn (or how often, over a footprint): no
   // shading frame, layer count or ply profile.
-  if (params_.mode == KnitMode::MultiScale) {
+  if (!near_field_at(hit)) {
     const float S = hit.pattern_per_world, us = params_.uv_scale;
     const float x = us * hit.u, y = us * hit.v;
     const Vec3 wi = k::kv3_neg(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n));

@@ -470,14 +470,20 @@ TEST(FootprintTable, HugeFootprintsStayBounded) {
   }
 }
 
-// Below a stitch cell a footprint gets the share of footprint_points its
-// area covers (at least one): seen straight down every point is one CAPM
-// segment, so the segments count the points.
-TEST(FootprintTable, FootprintsBelowACellMarchPointsInProportionToTheirArea) {
+// Below a stitch cell a footprint is shaded as the near field (the default,
+// near_field_below_cell), or, without that, gets the share of
+// footprint_points its area covers (at least one): seen straight down every
+// point is one CAPM segment, so the segments count the points.
+TEST(FootprintTable, FootprintsBelowACellAreTheNearFieldOrMarchPointsInProportionToTheirArea) {
   KnitMaterialParams mp;
   mp.mode = KnitMode::MultiScale;
   mp.footprint_points = 16;
+  mp.near_field_below_cell = false;  // (by default such footprints are the near field, below)
   KnitMaterial m(seed(), mp);
+  mp.near_field_below_cell = true;
+  KnitMaterial nf_below(seed(), mp);
+  mp.mode = KnitMode::NearField;
+  KnitMaterial near(seed(), mp);
   const float cell = 6.2831853f * m.surface().geom().row_spacing;
   BaseHit hit;
   hit.u = 0.31f;
@@ -486,8 +492,26 @@ TEST(FootprintTable, FootprintsBelowACellMarchPointsInProportionToTheirArea) {
   for (const auto& [area, points] : std::vector<std::pair<float, int>>{{0.0f, 1}, {1e-4f, 1}, {0.25f, 4}, {0.5f, 8},
                                                                       {0.99f, 16}}) {
     hit.dudx = hit.dvdy = std::sqrt(area * cell) / mp.uv_scale;
+    EXPECT_FALSE(m.near_field_at(hit));
     EXPECT_EQ(m.shade(hit, down, nullptr).steps, points) << "footprint of " << area << " cells";
+    // With near_field_below_cell: one near-field ray, in the shell (so the
+    // renderer self-shadows it), as the near-field material shades it.
+    EXPECT_TRUE(nf_below.near_field_at(hit));
+    const KnitShade a = nf_below.shade(hit, down, nullptr, {0.9f, 0.1f}), b = near.shade(hit, down, nullptr);
+    EXPECT_EQ(a.steps, b.steps);
+    EXPECT_EQ(a.in_shell, b.in_shell);
+    EXPECT_EQ(a.pass_through, b.pass_through);
+    EXPECT_EQ(a.point.layers, b.point.layers);
+    EXPECT_EQ(a.sn.x, b.sn.x);
+    EXPECT_EQ(a.sn.z, b.sn.z);
   }
+  // A cell or more in both directions: the class table, not the near field.
+  hit.dudx = 1.2f * 6.2831853f / mp.uv_scale;
+  hit.dvdy = 1.2f * m.surface().geom().row_spacing / mp.uv_scale;
+  EXPECT_FALSE(nf_below.near_field_at(hit));
+  EXPECT_TRUE(nf_below.shade(hit, down, nullptr).from_table);
+  hit.dvdy = 0.8f * m.surface().geom().row_spacing / mp.uv_scale;  // below a cell in one direction
+  EXPECT_TRUE(nf_below.near_field_at(hit));
 }
 
 }  // namespace

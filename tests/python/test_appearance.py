@@ -726,7 +726,34 @@ class KnitMaterialMultiScale(unittest.TestCase):
         self.stitch = knitshade.StitchParams()
         self.surf = knitshade.KnitSurface(seed_pattern(), self.stitch)
         self.m = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0)
+        # The marched aggregate also below a stitch cell (by default those
+        # footprints are shaded as the near field).
+        self.agg = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0,
+                                          near_field_below_cell=False)
         self.rng = np.random.default_rng(21)
+
+    def test_footprints_below_a_cell_are_the_near_field(self):
+        # A footprint below a stitch cell in either direction (the cell is
+        # 2 pi x (h + 0.5) pattern units here) is shaded as the near field
+        # at the hit: the same values as the near-field material, bit for
+        # bit, whatever the shift. A cell or more in both: the aggregate.
+        self.assertTrue(self.m.near_field_below_cell)
+        self.assertFalse(self.agg.near_field_below_cell)
+        near = knitshade.KnitMaterial(seed_pattern(), self.stitch, uv_scale=1.0)
+        n = 300
+        u, v = self.rng.uniform(0, 40, n), self.rng.uniform(0, 40, n)
+        d = -random_view(self.rng, n, 1.2)
+        nf = near.shade(u, v, d)
+        for fp in ([0.5, 0.1, -0.1, 0.5], [5.0, 0.0, 0.0, 4.0], [30.0, 0.0, 0.0, 3.0], [3.0, 0.0, 0.0, 30.0]):
+            with self.subTest(footprint=fp):
+                sh = self.m.shade(u, v, d, footprint=fp, shift=self.rng.random((n, 2)))
+                for key in nf:
+                    np.testing.assert_array_equal(sh[key], nf[key], err_msg=key)
+                np.testing.assert_array_equal(self.m.transmittance(u, v, d, footprint=fp), nf["p_delta"])
+                ag = self.agg.shade(u, v, d, footprint=fp, shift=[0.3, 0.7])
+                self.assertFalse(np.array_equal(ag["sn"], nf["sn"], equal_nan=True))
+        big = self.m.shade(u, v, d, footprint=[7.0, 0.0, 0.0, 5.0], shift=[0.3, 0.7])
+        self.assertTrue(np.all(big["steps"] == 0), "a cell or more in both directions: the class table")
 
     def test_p_delta_is_a_probability_and_equals_transmittance(self):
         n = 300
@@ -735,8 +762,8 @@ class KnitMaterialMultiScale(unittest.TestCase):
         shift = self.rng.random((n, 2))
         for width in (0.5, 3.0, 20.0):
             fp = [width, 0.3 * width, -0.2 * width, width]
-            sh = self.m.shade(u, v, d, footprint=fp, shift=shift)
-            tr = self.m.transmittance(u, v, d, footprint=fp, shift=shift)
+            sh = self.agg.shade(u, v, d, footprint=fp, shift=shift)
+            tr = self.agg.transmittance(u, v, d, footprint=fp, shift=shift)
             with self.subTest(width=width):
                 self.assertTrue(np.all((sh["p_delta"] >= 0) & (sh["p_delta"] <= 1)))
                 np.testing.assert_array_equal(sh["p_delta"], tr)
@@ -761,15 +788,16 @@ class KnitMaterialMultiScale(unittest.TestCase):
         n = 120
         u, v = self.rng.uniform(0, 40, n), self.rng.uniform(0, 40, n)
         wi = direction(35)
-        sh = self.m.shade(u, v, -wi, footprint=[2.5, 0.0, 0.0, 2.0], shift=[0.3, 0.7])
-        # Below a stitch cell the material marches the share of its
-        # footprint_points that the footprint's area covers (at least one).
+        sh = self.agg.shade(u, v, -wi, footprint=[2.5, 0.0, 0.0, 2.0], shift=[0.3, 0.7])
+        # Below a stitch cell (without near_field_below_cell) the material
+        # marches the share of its footprint_points that the footprint's
+        # area covers (at least one).
         cell = 2 * math.pi * (self.stitch.h + 0.5)
-        self.assertEqual(self.m.footprint_points, 4)
-        points = math.ceil(self.m.footprint_points * 2.5 * 2.0 / cell)
+        self.assertEqual(self.agg.footprint_points, 4)
+        points = math.ceil(self.agg.footprint_points * 2.5 * 2.0 / cell)
         self.assertEqual(points, 1)
         many = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0,
-                                      footprint_points=16)
+                                      footprint_points=16, near_field_below_cell=False)
         self.assertEqual(math.ceil(16 * 2.5 * 2.0 / cell), 3)
         sh16 = many.shade(u, v, -wi, footprint=[2.5, 0.0, 0.0, 2.0], shift=[0.3, 0.7])
         ag16 = self.surf.aggregate(u, v, [2.5, 0.0], [0.0, 2.0], wi, 3, 0.3, 0.7)
@@ -805,7 +833,9 @@ class KnitMaterialMultiScale(unittest.TestCase):
         n = 300
         u, v = self.rng.uniform(0, 40, n), self.rng.uniform(0, 40, n)
         d = -random_view(self.rng, n, 1.0)
-        far = self.m.shade(u, v, d, footprint=[1e-5, 0, 0, 1e-5])
+        # (the aggregate's own limit: by default such a footprint is the near
+        # field outright, test_footprints_below_a_cell_are_the_near_field)
+        far = self.agg.shade(u, v, d, footprint=[1e-5, 0, 0, 1e-5])
         nf = near.shade(u, v, d)
         agree = far["pass_through"] == nf["pass_through"]
         self.assertGreaterEqual(agree.mean(), 0.99)
@@ -832,7 +862,8 @@ class KnitMaterialMultiScale(unittest.TestCase):
         miss = 1.0 - self.surf.query(u, v)["hit"].mean()
         sigma_miss = math.sqrt(miss * (1 - miss) / n)
         for width in (2.0, 20.0):  # below one stitch cell and over several (cell-stratified)
-            sh = self.m.shade(u, v, [0.0, 0.0, -1.0], footprint=[width, 0, 0, width], shift=self.rng.random((n, 2)))
+            sh = self.agg.shade(u, v, [0.0, 0.0, -1.0], footprint=[width, 0, 0, width],
+                                shift=self.rng.random((n, 2)))
             pd = sh["p_delta"]
             with self.subTest(width=width):
                 self.assertLess(abs(pd.mean() - miss), 4 * math.hypot(sigma_miss, pd.std() / math.sqrt(n)))
@@ -868,6 +899,8 @@ class KnitMaterialInterface(unittest.TestCase):
         self.assertTrue(d.footprint_table)
         self.assertFalse(knitshade.KnitMaterial(knitshade.Pattern(), footprint_table=False).footprint_table)
         self.assertTrue(d.self_shadowing)
+        self.assertTrue(d.near_field_below_cell)
+        self.assertFalse(knitshade.KnitMaterial(knitshade.Pattern(), near_field_below_cell=False).near_field_below_cell)
         self.assertFalse(knitshade.KnitMaterial(knitshade.Pattern(), self_shadowing=False).self_shadowing)
         self.assertAlmostEqual(d.uv_scale, 40.0)
         # bsdf and ply as dicts of keyword arguments

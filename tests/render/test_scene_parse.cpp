@@ -233,7 +233,7 @@ TEST(SceneParse, KnitMaterialMapsOntoTheModel) {
                "eta": 1.4, "body_energy": 0.9, "body_reflect": 0.3, "optical_depth": 2},
       "ply": {"ply_count": 2, "ply_twist": 45, "fiber_count": 20, "fiber_twist": -10},
       "mode": "multi_scale", "capm": false, "footprint_points": 8, "frames": "curvature", "explicit_samples": 12,
-      "footprint_table": false, "self_shadowing": false})");
+      "footprint_table": false, "self_shadowing": false, "near_field_below_cell": false})");
   const SceneDesc d = parse(j);
   const KnitDesc& k = d.materials[1].knit;
   ASSERT_TRUE(k.model);
@@ -264,6 +264,7 @@ TEST(SceneParse, KnitMaterialMapsOntoTheModel) {
   EXPECT_EQ(p.footprint_points, 8);
   EXPECT_FALSE(p.footprint_table);
   EXPECT_FALSE(p.self_shadowing);
+  EXPECT_FALSE(p.near_field_below_cell);
   EXPECT_EQ(k.frames, KnitFrames::Curvature);
   EXPECT_EQ(k.explicit_samples, 12);
   EXPECT_EQ(k.model->surface().pattern().cols(), 2);

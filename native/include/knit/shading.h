@@ -35,6 +35,10 @@ struct KnitMaterialParams {
   int footprint_points = 4;     // multi-scale Sobol' points per cell-sized footprint (docs/multiscale.md)
   bool footprint_table = true;  // multi-scale footprints of a cell or more: the class table, not marches
   bool self_shadowing = true;   // near field: light and bounces from a yarn hit cross the rest of the shell
+  // Multi-scale: a footprint below a stitch cell (in either direction) is
+  // shaded as the near field at the hit (the pixel's samples cover the
+  // footprint); false: the marched aggregate of its points (docs/multiscale.md).
+  bool near_field_below_cell = true;
   float uv_scale = 40.0f;       // pattern units per UV unit (x = uv_scale u, y = uv_scale v)
   CapmOptions capm_options;
 
@@ -93,6 +97,10 @@ class KnitMaterial {
   // table for their colours or points. A renderer may skip drawing it
   // otherwise (the results are the same for any shift).
   bool uses_shift(const BaseHit& hit) const;
+  // Whether shade() and transmittance() treat this hit as near field: the
+  // near-field mode, or a multi-scale footprint below a stitch cell with
+  // near_field_below_cell.
+  bool near_field_at(const BaseHit& hit) const;
 
   // Fraction of light a shadow ray along ray_dir passes through the fabric
   // here: near-field 0 or 1 (a gap or a yarn), multi-scale p_delta.
