@@ -213,22 +213,25 @@ void KnitMaterial::set_colors(KnitShade& sh, int color_index) const {
   sh.kd_t = params_.bsdf.transmit_colors[size_t(c)];
 }
 
-bool KnitMaterial::near_field_at(const BaseHit& hit) const {
-  if (params_.mode != KnitMode::MultiScale) return true;
-  if (!params_.near_field_below_cell) return false;
+bool KnitMaterial::stratified(const BaseHit& hit) const {
   Vec3 fx, fy;
   footprint_axes(hit, fx, fy);
-  return k::knit_footprint_stratified(surface_.geom(), fx, fy) == 0;
+  return k::knit_footprint_stratified(surface_.geom(), fx, fy) != 0;
+}
+
+bool KnitMaterial::near_field_at(const BaseHit& hit) const {
+  if (params_.mode != KnitMode::MultiScale) return true;
+  return params_.near_field_below_cell && !stratified(hit);
 }
 
 bool KnitMaterial::uses_shift(const BaseHit& hit) const {
-  if (near_field_at(hit)) return false;  // one ray, no footprint points
-  if (!table_ || !table_->counts_without_points()) return true;
+  if (params_.mode != KnitMode::MultiScale) return false;  // one ray, no footprint points
+  const bool by_cell = stratified(hit);
+  if (!by_cell && params_.near_field_below_cell) return false;  // the near field, as above
   // From the class table (the same test as shade's) with no points: only a
   // marched footprint reads the shift.
-  Vec3 fx, fy;
-  footprint_axes(hit, fx, fy);
-  return k::knit_footprint_stratified(surface_.geom(), fx, fy) == 0;
+  if (!table_ || !table_->counts_without_points()) return true;
+  return !by_cell;
 }
 
 KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,

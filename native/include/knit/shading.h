@@ -153,6 +153,9 @@ class KnitMaterial {
     fx = k::kv3(us * hit.dudx, us * hit.dvdx, 0);
     fy = k::kv3(us * hit.dudy, us * hit.dvdy, 0);
   }
+  // Whether the hit's footprint spans a stitch cell or more in both
+  // directions (knit_footprint_stratified): the class table's domain.
+  bool stratified(const BaseHit& hit) const;
   void set_colors(KnitShade& sh, int color_index) const;
   // Palette mixed by a footprint's colour histogram (KNIT_MS_COLORS bins).
   void mix_colors(KnitShade& sh, const float* weights) const;
