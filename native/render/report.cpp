@@ -2,6 +2,7 @@
 
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
@@ -79,10 +80,13 @@ std::string RenderReport::to_text() const {
                     samples ? double(marches_spared) / double(samples) : 0.0);
       s += buf;
     }
-    if (table_resolves > 0) {
-      std::snprintf(buf, sizeof buf, "  multi-scale %.1f%% of the knit hits from the class table, %.1f%% marched\n",
-                    100.0 * double(table_resolves) / double(resolves),
-                    100.0 - 100.0 * double(table_resolves) / double(resolves));
+    if (table_resolves > 0 || aggregate_resolves > 0) {
+      const double table = 100.0 * double(table_resolves) / double(resolves);
+      const double aggregated = 100.0 * double(aggregate_resolves) / double(resolves);
+      std::snprintf(buf, sizeof buf,
+                    "  multi-scale %.1f%% of the knit hits from the class table, %.1f%% aggregated over marched "
+                    "points, %.1f%% as the near field (footprints below a stitch cell, bounces)\n",
+                    table, aggregated, std::max(0.0, 100.0 - table - aggregated));
       s += buf;
     }
     if (explicit_yarns) {
@@ -139,7 +143,7 @@ std::string RenderReport::to_json() const {
   j["knit"] = {{"materials", knit_materials}, {"explicit_yarns", explicit_yarns},
                {"hits", resolves}, {"hits_passed", resolve_passes}, {"shadow_crossings", shadow_resolves},
                {"shell_bounces", shell_bounces}, {"table_hits", table_resolves},
-               {"marches_spared", marches_spared},
+               {"aggregated_hits", aggregate_resolves}, {"marches_spared", marches_spared},
                {"yarn_points", yarn_points}, {"yarn_segments", yarn_segments}, {"yarn_curves", yarn_curves},
                {"yarn_build_seconds", yarn_build_seconds}};
   return j.dump(2) + "\n";

@@ -128,7 +128,8 @@ TEST(Cli, RendersKnitWithTheModelAndAsExplicitYarns) {
   EXPECT_EQ(rm["knit"]["materials"], 1);
   EXPECT_EQ(rm["knit"]["explicit_yarns"], false);
   EXPECT_GT(rm["knit"]["hits"].get<uint64_t>(), 0u);
-  EXPECT_EQ(rm["knit"]["table_hits"], 0);  // near field: no class table
+  EXPECT_EQ(rm["knit"]["table_hits"], 0);  // near field: no class table ...
+  EXPECT_EQ(rm["knit"]["aggregated_hits"], 0);  // ... nor footprint aggregates
   EXPECT_GT(rm["memory_bytes"]["knit_state"].get<uint64_t>(), 0u);
   EXPECT_EQ(rm["memory_bytes"]["yarn_geometry"], 0);
   EXPECT_EQ(rm["triangles"], 2);
@@ -158,6 +159,33 @@ TEST(Cli, RendersKnitWithTheModelAndAsExplicitYarns) {
   EXPECT_GT(re["memory_bytes"]["embree_yarns"].get<int64_t>(), 0);
   EXPECT_EQ(re["triangles"], 0);  // the base mesh is replaced by the tubes
   EXPECT_EQ(rm["seconds"]["knit_tables"], 0.0);  // near field: nothing built
+}
+
+// How a multi-scale knit shaded its hits: footprints below a stitch cell
+// (here every camera footprint, at uv_scale 1) as the near field by
+// default, as marched aggregates with near_field_below_cell false; the
+// report counts both kinds apart from the class table's.
+TEST(Cli, ReportsHowMultiScaleHitsWereShaded) {
+  const std::string dir = test::test_dir();
+  for (const bool near : {true, false}) {
+    const std::string scene = test::write_file(
+        dir, "scene.json",
+        small_scene(std::string(R"({"type": "knit", "pattern": ["KP", "PK"], "uv_scale": 1, "mode": "multi_scale",
+                                    "near_field_below_cell": )") +
+                    (near ? "true" : "false") + R"(, "yarn_colors": [[0.7, 0.1, 0.1]]})"));
+    const CliRun r = run(dir, "render " + scene + " -o " + dir + "/ms.exr --report " + dir + "/ms.json");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const nlohmann::json k = nlohmann::json::parse(test::read_file(dir + "/ms.json"))["knit"];
+    EXPECT_EQ(k["table_hits"], 0) << near;
+    if (near) {
+      EXPECT_EQ(k["aggregated_hits"], 0);
+      EXPECT_EQ(r.out.find("aggregated over marched points"), std::string::npos) << r.out;  // (none to report)
+    } else {
+      EXPECT_GT(k["aggregated_hits"].get<uint64_t>(), 0u);
+      EXPECT_LE(k["aggregated_hits"].get<uint64_t>(), k["hits"].get<uint64_t>());
+      EXPECT_NE(r.out.find("aggregated over marched points"), std::string::npos) << r.out;
+    }
+  }
 }
 
 TEST(Cli, ReportsTheClassTableBuildApartFromParsing) {
