@@ -161,7 +161,7 @@ PassThrough KnitModelMaterial::resolve(SurfaceInteraction& si, const RayDifferen
   const Vec2 shift = footprint_shift(model, hit, sampler);
   const knit::KnitShade sh = model.shade(hit, to_kvec(ray.d), frame_.get(), {shift.x, shift.y});
   pt.from_table = sh.from_table;
-  pt.aggregated = !sh.from_table && !model.near_field_at(hit);
+  pt.aggregated = sh.aggregated;
   if (sh.pass_through) {
     pt.pass = true;  // no yarn along this ray: it goes on straight
     return pt;

@@ -260,6 +260,7 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
       a = k::knit_aggregate(surface_.geom(), surface_.codes(), surface_.colors(), x, y, fx, fy, wi, points,
                             shift[0], shift[1], kap.x, kap.y, params_.capm_options.max_segment,
                             params_.capm_options.max_steps);
+      sh.aggregated = true;
     }
     sh.steps = int(a.steps * float(a.points) + 0.5f);
     if (a.hits == 0) {

@@ -493,12 +493,16 @@ TEST(FootprintTable, FootprintsBelowACellAreTheNearFieldOrMarchPointsInProportio
                                                                       {0.99f, 16}}) {
     hit.dudx = hit.dvdy = std::sqrt(area * cell) / mp.uv_scale;
     EXPECT_FALSE(m.near_field_at(hit));
-    EXPECT_EQ(m.shade(hit, down, nullptr).steps, points) << "footprint of " << area << " cells";
+    const KnitShade agg = m.shade(hit, down, nullptr);
+    EXPECT_EQ(agg.steps, points) << "footprint of " << area << " cells";
+    EXPECT_TRUE(agg.aggregated);
+    EXPECT_FALSE(agg.in_shell);
     // With near_field_below_cell: one near-field ray, in the shell (so the
     // renderer self-shadows it), as the near-field material shades it.
     EXPECT_TRUE(nf_below.near_field_at(hit));
     const KnitShade a = nf_below.shade(hit, down, nullptr, {0.9f, 0.1f}), b = near.shade(hit, down, nullptr);
     EXPECT_EQ(a.steps, b.steps);
+    EXPECT_FALSE(a.aggregated);
     EXPECT_EQ(a.in_shell, b.in_shell);
     EXPECT_EQ(a.pass_through, b.pass_through);
     EXPECT_EQ(a.point.layers, b.point.layers);
@@ -509,7 +513,9 @@ TEST(FootprintTable, FootprintsBelowACellAreTheNearFieldOrMarchPointsInProportio
   hit.dudx = 1.2f * 6.2831853f / mp.uv_scale;
   hit.dvdy = 1.2f * m.surface().geom().row_spacing / mp.uv_scale;
   EXPECT_FALSE(nf_below.near_field_at(hit));
-  EXPECT_TRUE(nf_below.shade(hit, down, nullptr).from_table);
+  const KnitShade t = nf_below.shade(hit, down, nullptr);
+  EXPECT_TRUE(t.from_table);
+  EXPECT_FALSE(t.aggregated);
   hit.dvdy = 0.8f * m.surface().geom().row_spacing / mp.uv_scale;  // below a cell in one direction
   EXPECT_TRUE(nf_below.near_field_at(hit));
 }

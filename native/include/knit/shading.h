@@ -69,6 +69,7 @@ struct KnitShade {
   k::KMicrofacet spec_r{}, spec_t{};  // specular lobes at this point (multi-scale: LEAN-widened)
   int steps = 0;             // CAPM segments marched (summed over footprint points)
   bool from_table = false;   // multi-scale: the footprint came from the class table (no march)
+  bool aggregated = false;   // multi-scale: the footprint's points were marched and aggregated
   // Near field: the yarn point hit, inside the shell (pattern space). Light
   // and bounces leaving it cross the rest of the shell first: occluded_from
   // and shade_from march from it.
