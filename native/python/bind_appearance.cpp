@@ -1099,7 +1099,7 @@ stitches). self_shadowing: near field, light and bounced rays from a yarn
 hit cross the rest of the yarn shell (KnitMaterial.occluded_from,
 shade_from) before they leave it. near_field_below_cell: a multi-scale
 footprint below a stitch cell in either direction is shaded as the near
-field at the hit (KnitMaterial.near_field_at); False: the marched
+field at the hit (C++: KnitMaterial::near_field_at); False: the marched
 aggregate of its points. capm=False: no parallax, the
 height query at the hit's (u, v). uv_scale: pattern units per UV unit. max_steps, max_segment,
 max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
@@ -1170,7 +1170,7 @@ stitch cell in either direction is shaded as the near field
   def_hit_method(knit_material, "transmittance", material_transmittance, R"doc(
 Fraction of light a shadow ray along ray_dir passes through the fabric at N
 base hits, (N,) array: near field 0 or 1 (a yarn or a gap), multi-scale
-p_delta (0 or 1 too where near_field_at: footprints below a stitch cell).)doc");
+p_delta (0 or 1 too for footprints below a stitch cell, with near_field_below_cell).)doc");
 }
 
 }  // namespace knit::py
