@@ -624,8 +624,9 @@ TEST(KnitVsExplicit, HalfCylinderFarViewMultiScale) {
       ASSERT_NE(m.knit.model->footprint_table(), nullptr);
     }
   });
-  // Measured +3.0%, 0.224, 0.190 (at 64 spp the MAE and the block error are
-  // mostly the two images' noise: noise RMSE 0.033 of RMSE 0.037).
+  // Measured +3.0%, 0.224, 0.190 when the bounds were set, +4.0%, 0.200,
+  // 0.184 on 2026-11-23 (at 64 spp the MAE and the block error are mostly
+  // the two images' noise: noise RMSE 0.028 of RMSE 0.032).
   EXPECT_LT(std::fabs(c.pixels.rel_bias), 0.06);
   EXPECT_LT(c.pixels.rel_mae, 0.3);
   EXPECT_LT(c.blocks.rel_rmse, 0.25);

@@ -63,9 +63,17 @@ class FootprintTable {
   static constexpr int kPhiBins = 16;    // nodes j 2 pi / 16
   static constexpr int kClasses = 10;
 
+  // How the build counts the layers under its hits: Auto batches them
+  // (KnitSurface::query_batch) where the CPU has a vector path, else one
+  // counting query at a time, as Scalar always does (for tests).
+  enum class LayerCounts { Auto, Scalar };
   // Marches `rays_per_direction` rays (flat base) per class present and per
   // direction; uses every hardware thread.
-  FootprintTable(const KnitSurface& surface, const CapmOptions& capm, int rays_per_direction = 256);
+  FootprintTable(const KnitSurface& surface, const CapmOptions& capm, int rays_per_direction = 256,
+                 LayerCounts layer_counts = LayerCounts::Auto);
+  // The node statistics (kMoments floats per class present and direction
+  // node), for tests.
+  const std::vector<float>& node_moments() const { return moments_; }
 
   // The aggregate over footprint f (stratified: a cell or more in both
   // directions, see knit_footprint) seen from wi_local (unit, towards the
