@@ -10,8 +10,8 @@ build=${1:?usage: scripts/render_examples.sh BUILD_DIR [SCENE...]}
 shift
 scenes=("$@")
 if ((${#scenes[@]} == 0)); then
-  scenes=(demo half_cylinder_front half_cylinder_back half_cylinder_closeup swatch_closeup swatch_far scarf
-          cushions tablecloth tablecloth_no_capm)
+  scenes=(demo half_cylinder_front half_cylinder_back half_cylinder_closeup swatch_closeup swatch_far
+          swatch_distant scarf cushions tablecloth tablecloth_no_capm)
 fi
 out=$(mktemp -d)
 mkdir -p docs/images

@@ -1,0 +1,92 @@
+// The example scenes (examples/scenes/*.json): every one loads and renders,
+// and the two far swatches are in the regimes the README says they are in.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "render/renderer.h"
+#include "render/scene.h"
+#include "render/scene_desc.h"
+#include "render_test_util.h"
+
+namespace knit::render {
+namespace {
+
+std::vector<std::string> example_scenes() {
+  std::vector<std::string> names;
+  for (const auto& e : std::filesystem::directory_iterator(test::source_dir() + "/examples/scenes"))
+    if (e.path().extension() == ".json") names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+RenderResult render_desc(const SceneDesc& d, int spp) {
+  Warnings w;
+  const Scene sc(d, BuildOptions{}, w);
+  RenderSettings s;
+  s.spp = spp;
+  s.seed = d.film.seed;
+  return render_image(sc, s);
+}
+
+// Each example scene, shrunk to 32 pixels wide at 1 spp: it loads (meshes,
+// patterns, images), builds and renders to a finite image with light in it.
+// A change to the scene format that an example was not updated for fails
+// here, not in a user's hands.
+TEST(Examples, EverySceneLoadsAndRenders) {
+  const std::vector<std::string> names = example_scenes();
+  EXPECT_GE(names.size(), 11u) << "examples/scenes lost scenes";
+  for (const std::string& name : names) {
+    SCOPED_TRACE(name);
+    SceneDesc d = load_scene_file(test::source_dir() + "/examples/scenes/" + name);
+    const double aspect = double(d.film.height) / double(d.film.width);
+    d.film.width = 32;
+    d.film.height = std::max(1, int(std::lround(32 * aspect)));
+    const RenderResult r = render_desc(d, 1);
+    EXPECT_EQ(r.stats.invalid_samples, 0u);
+    ASSERT_EQ(r.image.pixels.size(), size_t(d.film.width) * size_t(d.film.height));
+    double sum = 0;
+    size_t bad = 0;
+    for (const auto& p : r.image.pixels) {
+      for (float c : {p.r, p.g, p.b}) {
+        if (!std::isfinite(c) || c < 0) ++bad;
+        sum += c;
+      }
+    }
+    EXPECT_EQ(bad, 0u);
+    EXPECT_GT(sum, 0.0) << "a black image";
+    std::printf("[examples] %s: %dx%d, mean %.4f, knit hits %llu\n", name.c_str(), d.film.width, d.film.height,
+                sum / (3.0 * double(r.image.pixels.size())), static_cast<unsigned long long>(r.stats.resolves));
+  }
+}
+
+// At their default size (480 x 360) the far swatch's footprints are mostly
+// below a stitch cell, so multi-scale mode shades them as the near field,
+// and the distant swatch (stitches a third the size) has every footprint a
+// cell or more, read from the class table (README, "Examples").
+TEST(Examples, SwatchesFarAndDistantAreInTheirRegimes) {
+  struct Case {
+    const char* name;
+    double min_table_share, max_table_share;
+  };
+  for (const Case& c : {Case{"swatch_far.json", 0.0, 0.1}, Case{"swatch_distant.json", 0.99, 1.0}}) {
+    SCOPED_TRACE(c.name);
+    const SceneDesc d = load_scene_file(test::source_dir() + "/examples/scenes/" + c.name);
+    ASSERT_EQ(d.film.width, 480);
+    const RenderResult r = render_desc(d, 1);
+    ASSERT_GT(r.stats.resolves, 0u);
+    const double share = double(r.stats.table_resolves) / double(r.stats.resolves);
+    std::printf("[examples] %s: %.1f%% of %llu knit hits from the class table\n", c.name, 100 * share,
+                static_cast<unsigned long long>(r.stats.resolves));
+    EXPECT_GE(share, c.min_table_share);
+    EXPECT_LE(share, c.max_table_share);
+  }
+}
+
+}  // namespace
+}  // namespace knit::render
