@@ -118,22 +118,34 @@ constexpr int kBlock = 1024;  // points per pass through the stages
 // AVX-512 intrinsics (_mm512_undefined_ps) as uninitialised once inlined.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wuninitialized"
+#if !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+
+// Each instruction set's functions are compiled for it alone: GCC's target
+// pragma, or for clang (the fuzzing build, scripts/fuzz.sh) its attribute
+// pragma, which gives every function declared in the region the target.
+#if defined(__clang__)
+#define KNIT_TARGET_BEGIN(isa) _Pragma(KNIT_TARGET_STR(clang attribute push(__attribute__((target(isa))), apply_to = function)))
+#define KNIT_TARGET_END _Pragma("clang attribute pop")
+#else
+#define KNIT_TARGET_BEGIN(isa) _Pragma("GCC push_options") _Pragma(KNIT_TARGET_STR(GCC target(isa)))
+#define KNIT_TARGET_END _Pragma("GCC pop_options")
+#endif
+#define KNIT_TARGET_STR(x) #x
 
 namespace avx512 {
-#pragma GCC push_options
-#pragma GCC target("avx512f,avx512dq,fma,avx2,bmi,bmi2,popcnt")
+KNIT_TARGET_BEGIN("avx512f,avx512dq,fma,avx2,bmi,bmi2,popcnt")
 #include "query_batch_avx512.inc"
 #include "query_batch_stages.inc"
-#pragma GCC pop_options
+KNIT_TARGET_END
 }  // namespace avx512
 
 namespace avx2 {
-#pragma GCC push_options
-#pragma GCC target("avx2,fma,popcnt")
+KNIT_TARGET_BEGIN("avx2,fma,popcnt")
 #include "query_batch_avx2.inc"
 #include "query_batch_stages.inc"
-#pragma GCC pop_options
+KNIT_TARGET_END
 }  // namespace avx2
 
 #pragma GCC diagnostic pop
