@@ -28,4 +28,24 @@ inline int64_t parse_int_option(const std::string& opt, const std::string& text,
   return static_cast<int64_t>(v);
 }
 
+// "WxH": two whole decimal integers in [lo, hi]; UsageError naming the
+// option and the value otherwise.
+struct SizeOption {
+  int width = 0, height = 0;
+};
+inline SizeOption parse_size_option(const std::string& opt, const std::string& text, int64_t lo, int64_t hi) {
+  const UsageError bad{opt + " needs WxH, W and H integers in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                       "], got '" + text + "'"};
+  const size_t x = text.find('x');
+  if (x == std::string::npos) throw bad;
+  SizeOption s;
+  try {
+    s.width = static_cast<int>(parse_int_option(opt, text.substr(0, x), lo, hi));
+    s.height = static_cast<int>(parse_int_option(opt, text.substr(x + 1), lo, hi));
+  } catch (const UsageError&) {
+    throw bad;
+  }
+  return s;
+}
+
 }  // namespace knit::cli

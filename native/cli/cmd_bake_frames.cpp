@@ -42,11 +42,9 @@ int run(const std::vector<std::string>& args) {
     } else if (a == "--resolution") {
       s.width = s.height = static_cast<int>(parse_int_option(a, option_value(args, i), 1, 16384));
     } else if (a == "--size") {
-      const std::string& v = option_value(args, i);
-      const size_t x = v.find('x');
-      if (x == std::string::npos) throw UsageError{"--size needs WxH, got '" + v + "'"};
-      s.width = static_cast<int>(parse_int_option(a, v.substr(0, x), 1, 16384));
-      s.height = static_cast<int>(parse_int_option(a, v.substr(x + 1), 1, 16384));
+      const SizeOption size = parse_size_option(a, option_value(args, i), 1, 16384);
+      s.width = size.width;
+      s.height = size.height;
     } else if (a == "--dilate") {
       s.dilate = static_cast<int>(parse_int_option(a, option_value(args, i), 0, 64));
     } else if (!a.empty() && a[0] == '-') {

@@ -22,6 +22,8 @@ const char* kUsage =
     "\n"
     "options:\n"
     "  -o, --output FILE        output image, .exr or .png (required)\n"
+    "  --size WxH               image size in pixels (overrides film.width and film.height;\n"
+    "                           the camera keeps its vertical field of view)\n"
     "  --spp N                  samples per pixel (overrides film.spp)\n"
     "  --seed N                 random seed (overrides film.seed)\n"
     "  --threads N              worker threads (default: all cores); the image does not depend on it\n"
@@ -48,6 +50,10 @@ int run(const std::vector<std::string>& args) {
       return 0;
     } else if (a == "-o" || a == "--output") {
       job.output_file = option_value(args, i);
+    } else if (a == "--size") {
+      const SizeOption size = parse_size_option(a, option_value(args, i), 1, 16384);
+      job.width = size.width;
+      job.height = size.height;
     } else if (a == "--spp") {
       job.spp = static_cast<int>(parse_int_option(a, option_value(args, i), 1, 1 << 20));
     } else if (a == "--seed") {

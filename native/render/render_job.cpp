@@ -44,6 +44,8 @@ RenderJobResult run_render_job(const RenderJob& job, const std::function<void(co
   SceneDesc desc = load_scene_file(job.scene_file, job.explicit_yarns && !job.knit_preview_diffuse);
   const double parse_seconds = since(t_start);
   Warnings warnings = desc.warnings;
+  if (job.width) desc.film.width = *job.width;
+  if (job.height) desc.film.height = *job.height;
   if (job.spp) desc.film.spp = *job.spp;
   if (job.seed) desc.film.seed = *job.seed;
 

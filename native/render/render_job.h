@@ -17,6 +17,7 @@ struct RenderJob {
   std::string scene_file;
   std::string output_file;  // .exr or .png; empty: do not write
   std::string report_file;  // JSON report; empty: none
+  std::optional<int> width, height;  // override film.width, film.height
   std::optional<int> spp;   // override film.spp
   std::optional<uint64_t> seed;
   int threads = 0;

@@ -5,6 +5,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -90,6 +91,47 @@ TEST(Cli, RendersPngAndExrWithAReport) {
   EXPECT_EQ(e.out, "");  // --quiet
   const RgbImage exr = read_rgb_image(dir + "/out.exr");
   EXPECT_EQ(exr.width, 24);
+}
+
+// --size overrides the film's size (a quick preview of a scene): the image
+// and the report have it; the camera keeps its vertical field of view, so
+// the middle columns of a wider image see what the scene's own size sees.
+TEST(Cli, SizeOverridesTheFilm) {
+  const std::string dir = test::test_dir();
+  const std::string scene = test::write_file(dir, "scene.json", small_scene());
+  const CliRun r = run(dir, "render " + scene + " -o " + dir + "/wide.exr --quiet --spp 64 --size 48x16 --report " +
+                                dir + "/wide.json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const RgbImage wide = read_rgb_image(dir + "/wide.exr");
+  EXPECT_EQ(wide.width, 48);
+  EXPECT_EQ(wide.height, 16);
+  const nlohmann::json rep = nlohmann::json::parse(test::read_file(dir + "/wide.json"));
+  EXPECT_EQ(rep["width"], 48);
+  EXPECT_EQ(rep["height"], 16);
+  // The scene's own 24 x 16 against the middle 24 columns of the wide image
+  // (other samples, so within the noise: measured 0.03% apart on the mean,
+  // 0.8% per pixel).
+  ASSERT_EQ(run(dir, "render " + scene + " -o " + dir + "/own.exr --quiet --spp 64").code, 0);
+  const RgbImage own = read_rgb_image(dir + "/own.exr");
+  ASSERT_EQ(own.width, 24);
+  double sum_own = 0, sum_mid = 0, diff = 0;
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 24; ++x) {
+      const Rgb a = own.at(x, y), b = wide.at(x + 12, y);
+      sum_own += a.r + a.g + a.b;
+      sum_mid += b.r + b.g + b.b;
+      diff += std::fabs(a.r - b.r) + std::fabs(a.g - b.g) + std::fabs(a.b - b.b);
+    }
+  std::printf("[size] middle of 48x16 against 24x16: means %.4f, %.4f; mean |difference| %.4f\n", sum_mid / 1152,
+              sum_own / 1152, diff / 1152);
+  EXPECT_NEAR(sum_mid / sum_own, 1.0, 0.02);
+  EXPECT_LT(diff / sum_own, 0.1);
+  for (const char* bad : {"48", "0x16", "48x", "x16", "48x16x2", "-4x16", "48x99999", "48X16"}) {
+    const CliRun b = run(dir, "render " + scene + " -o " + dir + "/bad.exr --size " + bad);
+    EXPECT_EQ(b.code, 2) << bad;
+    EXPECT_NE(b.err.find("--size"), std::string::npos) << b.err;
+    EXPECT_NE(b.err.find(std::string("'") + bad), std::string::npos) << b.err;
+  }
 }
 
 TEST(Cli, BadSceneGivesOneLineAndExitCode1) {
