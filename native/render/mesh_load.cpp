@@ -4,9 +4,14 @@
 #include <assimp/scene.h>
 
 #include <assimp/Importer.hpp>
+#include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <functional>
+#include <sstream>
+#include <vector>
 
 #include "render/mesh.h"
 
@@ -23,18 +28,121 @@ Transform to_transform(const aiMatrix4x4& m) {
   throw MeshError(file + ": " + msg);
 }
 
+// Bytes of a PLY scalar type in binary files; 0 for an unknown name.
+int ply_type_bytes(const std::string& t) {
+  if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+  if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+  if (t == "int" || t == "uint" || t == "int32" || t == "uint32" || t == "float" || t == "float32") return 4;
+  if (t == "double" || t == "float64") return 8;
+  return 0;
+}
+
+// assimp 5.2's PLY reader does not stop on a header that never reaches
+// end_header (it keeps seeking through the file: a hang), and trusts its
+// element counts. A file that starts as PLY gets its header checked here
+// first: known lines only, a format, counts the data after the header can
+// hold (at least one byte per property of each element, whether ASCII or
+// binary), and an end_header within the first 64 KiB.
+void check_ply_header(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string head(65536, '\0');
+  in.read(&head[0], static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<size_t>(in.gcount()));
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  // (assimp takes a file for PLY by its extension or its first three bytes)
+  if (head.compare(0, 3, "ply") != 0 && ext != ".ply") return;
+  struct Element {
+    std::string name;
+    uint64_t count = 0, min_bytes = 0;  // entries; bytes each takes at least
+  };
+  std::vector<Element> elements;
+  bool binary = false, have_format = false, ended = false;
+  size_t pos = 0;
+  int line = 0;
+  auto bad = [&](const std::string& what) { fail(path, "PLY header line " + std::to_string(line) + ": " + what); };
+  while (!ended) {
+    const size_t nl = head.find('\n', pos);
+    if (nl == std::string::npos) break;
+    std::string text = head.substr(pos, nl - pos);
+    pos = nl + 1;
+    ++line;
+    if (!text.empty() && text.back() == '\r') text.pop_back();
+    std::istringstream ss(text);
+    std::vector<std::string> tok;
+    for (std::string t; ss >> t;) tok.push_back(t);
+    if (line == 1) {
+      if (text != "ply") bad("a PLY file starts with a line 'ply'");
+      continue;
+    }
+    if (tok.empty()) continue;
+    const std::string& kw = tok[0];
+    if (kw == "comment" || kw == "obj_info") continue;
+    if (kw == "format") {
+      if (tok.size() != 3 || (tok[1] != "ascii" && tok[1] != "binary_little_endian" && tok[1] != "binary_big_endian"))
+        bad("expected 'format ascii|binary_little_endian|binary_big_endian 1.0', got '" + text + "'");
+      binary = tok[1] != "ascii";
+      have_format = true;
+    } else if (kw == "element") {
+      if (tok.size() != 3 || tok[2].find_first_not_of("0123456789") != std::string::npos || tok[2].size() > 10)
+        bad("expected 'element NAME COUNT', got '" + text + "'");
+      Element e;
+      e.name = tok[1];
+      e.count = std::stoull(tok[2]);
+      elements.push_back(e);
+    } else if (kw == "property") {
+      if (elements.empty()) bad("a property before any element: '" + text + "'");
+      const bool list = tok.size() >= 2 && tok[1] == "list";
+      if (list ? (tok.size() != 5 || !ply_type_bytes(tok[2]) || !ply_type_bytes(tok[3]))
+               : (tok.size() != 3 || !ply_type_bytes(tok[1])))
+        bad("expected 'property TYPE NAME' or 'property list TYPE TYPE NAME', got '" + text + "'");
+      elements.back().min_bytes += binary ? uint64_t(ply_type_bytes(list ? tok[2] : tok[1])) : 1;
+    } else if (kw == "end_header") {
+      ended = true;
+    } else {
+      bad("unknown header line '" + text + "'");
+    }
+  }
+  if (!ended) fail(path, "the PLY header has no end_header line (in its first 64 KiB)");
+  if (!have_format) fail(path, "the PLY header has no format line");
+  std::error_code ec;
+  const uint64_t size = std::filesystem::file_size(path, ec);
+  const uint64_t data = ec || size < pos ? 0 : size - pos;
+  uint64_t need = 0;
+  for (const Element& e : elements) {
+    const uint64_t each = e.min_bytes > 0 ? e.min_bytes : 1;
+    need += e.count * each;  // counts below 10^10, at most 8 bytes a property: no overflow
+    if (need > data)
+      fail(path, "the PLY header declares " + std::to_string(e.count) + " '" + e.name +
+                     "' elements, more than the " + std::to_string(data) + " bytes after the header can hold");
+  }
+}
+
 }  // namespace
 
 TriangleMesh load_mesh(const std::string& path, Warnings* warnings) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) fail(path, "mesh file not found");
 
+  check_ply_header(path);
+
   Assimp::Importer importer;
   // Points and lines are dropped; polygons are triangulated. No normal or
   // UV generation here: we compute normals ourselves, and UVs must be real.
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-  const aiScene* scene = importer.ReadFile(
-      path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
+  // Read and validated alone first (ValidateDataStructure: assimp's own
+  // check of what its importers made, face indices included), then the
+  // faces checked for what assimp's post-processing asserts on (Debian
+  // builds it with assertions: an abort, not an error), then processed.
+  const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+  if (!scene || !scene->mRootNode) fail(path, std::string("cannot read mesh: ") + importer.GetErrorString());
+  for (unsigned i = 0; i < scene->mNumMeshes; ++i) {
+    const aiMesh* m = scene->mMeshes[i];
+    for (unsigned f = 0; f < m->mNumFaces; ++f)
+      if (m->mFaces[f].mNumIndices == 0 || m->mFaces[f].mIndices == nullptr)
+        fail(path, "face " + std::to_string(f) + " of part " + std::to_string(i) + " has no vertices");
+  }
+  scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
   if (!scene || !scene->mRootNode) fail(path, std::string("cannot read mesh: ") + importer.GetErrorString());
 
   TriangleMesh out;
@@ -83,6 +191,10 @@ TriangleMesh load_mesh(const std::string& path, Warnings* warnings) {
       for (unsigned f = 0; f < m->mNumFaces; ++f) {
         const aiFace& face = m->mFaces[f];
         if (face.mNumIndices != 3) continue;
+        for (unsigned corner = 0; corner < 3; ++corner)
+          if (face.mIndices[corner] >= m->mNumVertices)
+            fail(path, "face " + std::to_string(f) + " refers to vertex " + std::to_string(face.mIndices[corner]) +
+                           " of " + std::to_string(m->mNumVertices));
         const uint32_t a = base + face.mIndices[0];
         uint32_t b = base + face.mIndices[1], c = base + face.mIndices[2];
         if (flip) std::swap(b, c);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 
 #include "render/mesh.h"
 #include "render_test_util.h"
@@ -160,6 +161,70 @@ TEST(MeshLoad, Errors) {
   EXPECT_NE(error_of(nan_n).find("nann.obj: vertex 0 has a non-finite normal"), std::string::npos) << error_of(nan_n);
   const std::string zero_n = test::write_file(dir, "zeron.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nf 1//1 2//1 3//1\n");
   EXPECT_NE(error_of(zero_n).find("zeron.obj: vertex 0 has a zero-length normal"), std::string::npos) << error_of(zero_n);
+}
+
+// assimp 5.2's PLY reader hangs on a header that never reaches end_header
+// and crashes in its post-processing on a face index beyond the vertices
+// (both found by mutating the examples' meshes, 2026-11-23; the files are in
+// tests/fuzz/corpus/mesh/found-*). The loader checks a PLY header itself
+// and has assimp validate what it read: each case is a one-line error.
+TEST(MeshLoad, MalformedPlyFilesGiveErrorsNotHangsOrCrashes) {
+  const std::string dir = test::test_dir();
+  auto error_of = [](const std::string& path) -> std::string {
+    try {
+      load_mesh(path);
+    } catch (const MeshError& e) {
+      return e.what();
+    }
+    return "(no error)";
+  };
+  const std::string vertex_header =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n";
+  const std::string unended = test::write_file(dir, "unended.ply", vertex_header + "element face 2\nproper");
+  EXPECT_NE(error_of(unended).find("unended.ply: the PLY header has no end_header line"), std::string::npos)
+      << error_of(unended);
+  const std::string no_end = test::write_file(dir, "noend.ply", vertex_header + "0 0 0\n1 0 0\n");
+  EXPECT_NE(error_of(no_end).find("noend.ply: PLY header line 7: unknown header line '0 0 0'"), std::string::npos)
+      << error_of(no_end);
+  const std::string first = test::write_file(dir, "first.ply", "ply\xd6\nformat ascii 1.0\nelement vertex 4\nprort");
+  EXPECT_NE(error_of(first).find("first.ply: PLY header line 1: a PLY file starts with a line 'ply'"),
+            std::string::npos)
+      << error_of(first);
+  const std::string no_format = test::write_file(dir, "noformat.ply", "ply\nelement vertex 0\nend_header\n");
+  EXPECT_NE(error_of(no_format).find("noformat.ply: the PLY header has no format line"), std::string::npos)
+      << error_of(no_format);
+  const std::string bad_type = test::write_file(dir, "type.ply", vertex_header + "property floatx s\nend_header\n");
+  EXPECT_NE(error_of(bad_type).find("type.ply: PLY header line 7: expected 'property TYPE NAME'"), std::string::npos)
+      << error_of(bad_type);
+  const std::string huge = test::write_file(
+      dir, "huge.ply",
+      vertex_header + "element face 100000000\nproperty list uchar int vertex_indices\nend_header\n"
+                      "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_NE(error_of(huge).find("huge.ply: the PLY header declares 100000000 'face' elements, more than the"),
+            std::string::npos)
+      << error_of(huge);
+  const std::string index = test::write_file(
+      dir, "index.ply",
+      vertex_header + "element face 2\nproperty list uchar int vertex_indices\nend_header\n"
+                      "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 999999999 3\n");
+  EXPECT_NE(error_of(index).find("index.ply: cannot read mesh: Validation failed: aiMesh::mFaces[1]::mIndices[1] is "
+                                 "out of range"),
+            std::string::npos)
+      << error_of(index);
+  // What the check must let through: binary PLY, comments, CRLF lines, a quad.
+  std::string bin =
+      "ply\r\nformat binary_little_endian 1.0\r\ncomment written by hand\r\nelement vertex 4\r\n"
+      "property float x\r\nproperty float y\r\nproperty float z\r\nproperty float u\r\nproperty float v\r\n"
+      "element face 1\r\nproperty list uchar int vertex_indices\r\nend_header\n";
+  const float verts[4][5] = {{0, 0, 0, 0, 0}, {1, 0, 0, 1, 0}, {1, 1, 0, 1, 1}, {0, 1, 0, 0, 1}};
+  bin.append(reinterpret_cast<const char*>(verts), sizeof verts);
+  bin.push_back(char(4));
+  const int32_t quad[4] = {0, 1, 2, 3};
+  bin.append(reinterpret_cast<const char*>(quad), sizeof quad);
+  const TriangleMesh m = load_mesh(test::write_file(dir, "bin.ply", bin));
+  EXPECT_EQ(m.num_triangles(), 2u);
+  ASSERT_TRUE(m.has_uvs());
+  EXPECT_EQ(m.positions.size(), 4u);
 }
 
 TEST(MeshLoad, MirroringTransformKeepsWindingAndNormalsConsistent) {
