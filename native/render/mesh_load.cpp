@@ -4,6 +4,7 @@
 #include <assimp/scene.h>
 
 #include <assimp/Importer.hpp>
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -176,9 +177,13 @@ TriangleMesh load_mesh(const std::string& path, Warnings* warnings) {
           if (!is_finite(n))
             fail(path, "vertex " + std::to_string(base + v) + " has a non-finite normal");
           if (!identity) n = xf.normal(n);
-          const float l = length(n);
-          if (!(l > 1e-20f)) fail(path, "vertex " + std::to_string(base + v) + " has a zero-length normal");
-          out.normals.push_back(n / l);
+          // (scaled by its largest component first: a normal of 1e38s
+          // overflows its length, tiny ones are directions too)
+          const float big = std::max(std::fabs(n.x), std::max(std::fabs(n.y), std::fabs(n.z)));
+          if (!(big > 0) || !std::isfinite(big))
+            fail(path, "vertex " + std::to_string(base + v) + " has a zero-length normal");
+          n = n / big;
+          out.normals.push_back(n / length(n));
         }
         if (all_uvs) {
           Vec2 uv(m->mTextureCoords[0][v].x, m->mTextureCoords[0][v].y);

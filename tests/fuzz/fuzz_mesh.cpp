@@ -1,7 +1,7 @@
 // libFuzzer harness for mesh files (docs/scene-format.md, "Meshes"): any
 // input either loads into a mesh that passes the loader's own checks
-// (finite positions, UVs and unit normals, triangle indices in range, no
-// degenerate triangle left) or throws a MeshError that names the file.
+// (finite positions and UVs, unit normals and tangents, triangle indices
+// in range) or throws a MeshError that names the file.
 // Anything else (a crash, a hang, another exception) is a finding. Input
 // starting with "ply" is written as a .ply file, anything else as .obj: the
 // two formats the examples use, read by Debian's assimp behind the loader's
@@ -38,9 +38,13 @@ void check_mesh(const knit::render::TriangleMesh& m) {
   if (m.normals.size() != n) fail("normals missing", std::to_string(m.normals.size()));
   for (const auto& v : m.normals)
     if (!finite(v) || std::fabs(v.x * v.x + v.y * v.y + v.z * v.z - 1.0f) > 1e-3f) fail("normal not unit", "");
-  if (m.has_uvs())
+  if (m.has_uvs()) {
     for (const auto& uv : m.uvs)
       if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) fail("non-finite UV", "");
+    if (m.tangents.size() != n || m.tangent_sign.size() != n) fail("tangents missing", "");
+    for (const auto& t : m.tangents)
+      if (!finite(t) || std::fabs(t.x * t.x + t.y * t.y + t.z * t.z - 1.0f) > 1e-3f) fail("tangent not unit", "");
+  }
 }
 
 // One scratch file per process (libFuzzer runs inputs one after another).

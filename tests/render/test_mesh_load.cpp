@@ -227,6 +227,20 @@ TEST(MeshLoad, MalformedPlyFilesGiveErrorsNotHangsOrCrashes) {
   EXPECT_EQ(m.positions.size(), 4u);
 }
 
+// A file normal of 1e38s overflowed its length, and the normal became zero
+// (found by the mesh fuzzer); scaled first, it is the direction it gives.
+TEST(MeshLoad, HugeAndTinyFileNormalsAreDirections) {
+  const std::string dir = test::test_dir();
+  const TriangleMesh m = load_mesh(test::write_file(
+      dir, "bign.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 1e38 1e38\nvn 0 0 1e-30\nf 1//1 2//2 3//1\n"));
+  ASSERT_TRUE(m.normals_from_file);
+  for (size_t v = 0; v < m.positions.size(); ++v) {
+    const Vec3 n = m.normals[v];
+    EXPECT_NEAR(length(n), 1.0f, 1e-6f) << v;
+    EXPECT_TRUE(std::fabs(n.z - 1.0f) < 1e-6f || std::fabs(n.y - 0.70710678f) < 1e-6f) << v;
+  }
+}
+
 TEST(MeshLoad, MirroringTransformKeepsWindingAndNormalsConsistent) {
   const TriangleMesh m = load_mesh(test::mesh("quad.obj"));
   const TriangleMesh w = transform_mesh(m, Transform::scale({-1, 1, 1}));
