@@ -134,16 +134,18 @@ TEST(MeshLoad, DegenerateTrianglesAreDroppedWithAWarning) {
       << w.messages[0];
 }
 
+// The loader's error for `path`, or "(no error)".
+std::string error_of(const std::string& path) {
+  try {
+    load_mesh(path);
+  } catch (const MeshError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
 TEST(MeshLoad, Errors) {
   const std::string dir = test::test_dir();
-  auto error_of = [](const std::string& path) -> std::string {
-    try {
-      load_mesh(path);
-    } catch (const MeshError& e) {
-      return e.what();
-    }
-    return "(no error)";
-  };
   EXPECT_NE(error_of(dir + "/none.obj").find("none.obj: mesh file not found"), std::string::npos);
   const std::string garbage = test::write_file(dir, "garbage.ply", "ply\nthis is not a ply file\n");
   EXPECT_NE(error_of(garbage).find("garbage.ply: "), std::string::npos);
@@ -170,14 +172,6 @@ TEST(MeshLoad, Errors) {
 // and has assimp validate what it read: each case is a one-line error.
 TEST(MeshLoad, MalformedPlyFilesGiveErrorsNotHangsOrCrashes) {
   const std::string dir = test::test_dir();
-  auto error_of = [](const std::string& path) -> std::string {
-    try {
-      load_mesh(path);
-    } catch (const MeshError& e) {
-      return e.what();
-    }
-    return "(no error)";
-  };
   const std::string vertex_header =
       "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n";
   const std::string unended = test::write_file(dir, "unended.ply", vertex_header + "element face 2\nproper");
