@@ -169,6 +169,10 @@ bool MeshFrame::lookup(Vec2 uv, Frame& f, int64_t* hint) const {
     float b1 = 0, b2 = 0;
     bool inside = false;
     const int64_t tri = triangle_at(uv, b1, b2, inside, hint);
+    if (tri < 0) {  // a non-finite UV: no triangle is nearest
+      f = Frame::from_normal_tangent({0, 0, 1}, {1, 0, 0});
+      return false;
+    }
     f = interpolate_frame(*mesh_, static_cast<size_t>(tri), b1, b2);
     return inside;
   }

@@ -84,15 +84,17 @@ int64_t UvTriangleGrid::locate(Vec2 uv, float& b1, float& b2) const {
   return -1;
 }
 
-// Closest point to p on segment [a, b]: parameter in [0, 1].
-static float closest_on_segment(Vec2 p, Vec2 a, Vec2 b, float& d2) {
-  const float ex = b.x - a.x, ey = b.y - a.y;
-  const float l2 = ex * ex + ey * ey;
-  float s = l2 > 0 ? ((p.x - a.x) * ex + (p.y - a.y) * ey) / l2 : 0;
-  s = std::clamp(s, 0.0f, 1.0f);
-  const float dx = a.x + s * ex - p.x, dy = a.y + s * ey - p.y;
+// Closest point to p on segment [a, b]: parameter in [0, 1]. In double, so
+// that a point far outside the charts (UV 1e30, a march at a tiny
+// uv_scale) still has a finite squared distance to compare.
+static float closest_on_segment(Vec2 p, Vec2 a, Vec2 b, double& d2) {
+  const double ex = double(b.x) - a.x, ey = double(b.y) - a.y;
+  const double l2 = ex * ex + ey * ey;
+  double s = l2 > 0 ? ((double(p.x) - a.x) * ex + (double(p.y) - a.y) * ey) / l2 : 0;
+  s = std::clamp(s, 0.0, 1.0);
+  const double dx = a.x + s * ex - p.x, dy = a.y + s * ey - p.y;
   d2 = dx * dx + dy * dy;
-  return s;
+  return static_cast<float>(s);
 }
 
 int64_t UvTriangleGrid::nearest(Vec2 uv, float& b1, float& b2) const {
@@ -103,12 +105,12 @@ int64_t UvTriangleGrid::nearest(Vec2 uv, float& b1, float& b2) const {
   cell_of(uv, cx, cy);
   const float cw = 1.0f / sx_, ch = 1.0f / sy_;
   // Distance from uv to the clamped cell, so ring distances are conservative.
-  float best = std::numeric_limits<float>::infinity();
+  double best = std::numeric_limits<double>::infinity();
   int64_t best_t = -1;
   const int max_ring = std::max(nx_, ny_);
   for (int ring = 0; ring <= max_ring; ++ring) {
     // Any triangle in ring r is at least (r - 1) cells away from uv's clamped cell.
-    const float ring_dist = std::max(0, ring - 1) * std::min(cw, ch);
+    const double ring_dist = std::max(0, ring - 1) * double(std::min(cw, ch));
     if (best_t >= 0 && ring_dist * ring_dist > best) break;
     for (int y = cy - ring; y <= cy + ring; ++y) {
       if (y < 0 || y >= ny_) continue;
@@ -127,7 +129,7 @@ int64_t UvTriangleGrid::nearest(Vec2 uv, float& b1, float& b2) const {
             return static_cast<int64_t>(t);
           }
           for (int e = 0; e < 3; ++e) {
-            float d2;
+            double d2;
             const float s = closest_on_segment(uv, v[e], v[(e + 1) % 3], d2);
             if (d2 < best || (d2 == best && static_cast<int64_t>(t) < best_t)) {
               best = d2;

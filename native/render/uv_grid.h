@@ -19,7 +19,9 @@ class UvTriangleGrid {
   // overlap) and its barycentrics of vertices 1 and 2; -1 if none.
   int64_t locate(Vec2 uv, float& b1, float& b2) const;
   // The triangle whose UV image is closest to `uv`, with the barycentrics of
-  // that closest point (inside the triangle); -1 only if the grid is empty.
+  // that closest point (inside the triangle); -1 only if the grid is empty
+  // or `uv` is not finite (distances are compared in double, so a point
+  // 1e30 away still finds its triangle).
   int64_t nearest(Vec2 uv, float& b1, float& b2) const;
 
   Vec2 uv_min() const { return lo_; }

@@ -79,6 +79,25 @@ TEST(MeshFrame, OutsideTheUvChartsUsesTheNearestTriangle) {
   EXPECT_NEAR(fr.n.x, -1.0f, 1e-3f);
   EXPECT_FALSE(f.lookup({kPiF + 0.3f, 2.5f}, fr));  // beyond the far corner
   EXPECT_NEAR(fr.n.x, 1.0f, 1e-3f);
+  EXPECT_FALSE(f.lookup({1e6f, 1.0f}, fr));
+  EXPECT_NEAR(fr.n.x, 1.0f, 1e-3f);
+  // Very far (a march at a tiny uv_scale divides pattern units by it): the
+  // squared distance overflowed float, no triangle was nearest, and the
+  // lookup read triangle -1 (a crash found by rendering the demo with
+  // extreme values). Now some boundary triangle answers (at 1e30 the
+  // charts' width is below the distances' rounding), and a non-finite UV
+  // gets the flat frame.
+  for (const Vec2 far : {Vec2{3e30f, 1.0f}, Vec2{-3e30f, -3e30f}, Vec2{1.0f, 3e38f}}) {
+    EXPECT_FALSE(f.lookup(far, fr));
+    EXPECT_NEAR(length(fr.n), 1.0f, 1e-5f);
+  }
+  EXPECT_FALSE(f.lookup({std::nanf(""), 1.0f}, fr));
+  EXPECT_EQ(fr.n.z, 1.0f);
+  int64_t hint = -1;
+  knit::Vec3 t, b, n;
+  const MeshFrame tiny(mesh, 1e-30f);
+  tiny.frame_near(2.0f, 1.0f, hint, t, b, n);
+  EXPECT_TRUE(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z));
 }
 
 // A march's lookups with one hint: the same frames and curvatures as
