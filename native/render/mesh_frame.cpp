@@ -170,7 +170,7 @@ bool MeshFrame::lookup(Vec2 uv, Frame& f, int64_t* hint) const {
     bool inside = false;
     const int64_t tri = triangle_at(uv, b1, b2, inside, hint);
     if (tri < 0) {  // a non-finite UV: no triangle is nearest
-      f = Frame::from_normal_tangent({0, 0, 1}, {1, 0, 0});
+      f = Frame();
       return false;
     }
     f = interpolate_frame(*mesh_, static_cast<size_t>(tri), b1, b2);

@@ -135,16 +135,19 @@ TriangleMesh load_mesh(const std::string& path, Warnings* warnings) {
   // check of what its importers made, face indices included), then the
   // faces checked for what assimp's post-processing asserts on (Debian
   // builds it with assertions: an abort, not an error), then processed.
-  const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
-  if (!scene || !scene->mRootNode) fail(path, std::string("cannot read mesh: ") + importer.GetErrorString());
+  auto read = [&](const aiScene* s) {
+    if (!s || !s->mRootNode) fail(path, std::string("cannot read mesh: ") + importer.GetErrorString());
+    return s;
+  };
+  const aiScene* scene = read(importer.ReadFile(path, aiProcess_ValidateDataStructure));
   for (unsigned i = 0; i < scene->mNumMeshes; ++i) {
     const aiMesh* m = scene->mMeshes[i];
     for (unsigned f = 0; f < m->mNumFaces; ++f)
       if (m->mFaces[f].mNumIndices == 0 || m->mFaces[f].mIndices == nullptr)
         fail(path, "face " + std::to_string(f) + " of part " + std::to_string(i) + " has no vertices");
   }
-  scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
-  if (!scene || !scene->mRootNode) fail(path, std::string("cannot read mesh: ") + importer.GetErrorString());
+  scene = read(importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                            aiProcess_SortByPType));
 
   TriangleMesh out;
   out.file = path;

@@ -26,7 +26,10 @@ namespace {
   std::abort();
 }
 
-bool finite(const knit::render::Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+// Finite and of unit length (within float rounding of the normalisation).
+bool unit(knit::render::Vec3 v) {
+  return knit::render::is_finite(v) && std::fabs(knit::render::dot(v, v) - 1.0f) <= 1e-3f;
+}
 
 void check_mesh(const knit::render::TriangleMesh& m) {
   const size_t n = m.positions.size();
@@ -34,16 +37,16 @@ void check_mesh(const knit::render::TriangleMesh& m) {
   for (uint32_t i : m.indices)
     if (i >= n) fail("index out of range", std::to_string(i) + " of " + std::to_string(n));
   for (const auto& p : m.positions)
-    if (!finite(p)) fail("non-finite position", "");
+    if (!knit::render::is_finite(p)) fail("non-finite position", "");
   if (m.normals.size() != n) fail("normals missing", std::to_string(m.normals.size()));
   for (const auto& v : m.normals)
-    if (!finite(v) || std::fabs(v.x * v.x + v.y * v.y + v.z * v.z - 1.0f) > 1e-3f) fail("normal not unit", "");
+    if (!unit(v)) fail("normal not unit", "");
   if (m.has_uvs()) {
     for (const auto& uv : m.uvs)
       if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) fail("non-finite UV", "");
     if (m.tangents.size() != n || m.tangent_sign.size() != n) fail("tangents missing", "");
     for (const auto& t : m.tangents)
-      if (!finite(t) || std::fabs(t.x * t.x + t.y * t.y + t.z * t.z - 1.0f) > 1e-3f) fail("tangent not unit", "");
+      if (!unit(t)) fail("tangent not unit", "");
   }
 }
 

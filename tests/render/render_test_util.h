@@ -46,17 +46,15 @@ inline std::string read_file(const std::string& path) {
   return ss.str();
 }
 
-// Renders scene text (written as <dir>/scene.json) and returns the image.
+// A rendered image, the render's result and the scene's warnings.
 struct Rendered {
   RgbImage image;
   RenderResult result;
   Warnings warnings;
 };
 
-inline Rendered render_text(const std::string& dir, const std::string& scene_text, int threads = 0,
-                            BuildOptions options = {}) {
-  const std::string path = write_file(dir, "scene.json", scene_text);
-  SceneDesc desc = load_scene_file(path);
+// Builds and renders a scene description with its film's spp and seed.
+inline Rendered render_desc(const SceneDesc& desc, int threads = 0, BuildOptions options = {}) {
   Rendered r;
   r.warnings = desc.warnings;
   const Scene scene(desc, options, r.warnings);
@@ -67,6 +65,12 @@ inline Rendered render_text(const std::string& dir, const std::string& scene_tex
   r.result = render_image(scene, s);
   r.image = r.result.image;
   return r;
+}
+
+// Renders scene text (written as <dir>/scene.json).
+inline Rendered render_text(const std::string& dir, const std::string& scene_text, int threads = 0,
+                            BuildOptions options = {}) {
+  return render_desc(load_scene_file(write_file(dir, "scene.json", scene_text)), threads, options);
 }
 
 inline double mean_channel_value(const RgbImage& img) {

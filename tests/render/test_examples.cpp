@@ -25,15 +25,6 @@ std::vector<std::string> example_scenes() {
   return names;
 }
 
-RenderResult render_desc(const SceneDesc& d, int spp) {
-  Warnings w;
-  const Scene sc(d, BuildOptions{}, w);
-  RenderSettings s;
-  s.spp = spp;
-  s.seed = d.film.seed;
-  return render_image(sc, s);
-}
-
 // Each example scene, shrunk to 32 pixels wide at 1 spp: it loads (meshes,
 // patterns, images), builds and renders to a finite image with light in it.
 // A change to the scene format that an example was not updated for fails
@@ -47,7 +38,8 @@ TEST(Examples, EverySceneLoadsAndRenders) {
     const double aspect = double(d.film.height) / double(d.film.width);
     d.film.width = 32;
     d.film.height = std::max(1, int(std::lround(32 * aspect)));
-    const RenderResult r = render_desc(d, 1);
+    d.film.spp = 1;
+    const RenderResult r = test::render_desc(d).result;
     EXPECT_EQ(r.stats.invalid_samples, 0u);
     ASSERT_EQ(r.image.pixels.size(), size_t(d.film.width) * size_t(d.film.height));
     double sum = 0;
@@ -76,9 +68,10 @@ TEST(Examples, SwatchesFarAndDistantAreInTheirRegimes) {
   };
   for (const Case& c : {Case{"swatch_far.json", 0.0, 0.1}, Case{"swatch_distant.json", 0.99, 1.0}}) {
     SCOPED_TRACE(c.name);
-    const SceneDesc d = load_scene_file(test::source_dir() + "/examples/scenes/" + c.name);
+    SceneDesc d = load_scene_file(test::source_dir() + "/examples/scenes/" + c.name);
     ASSERT_EQ(d.film.width, 480);
-    const RenderResult r = render_desc(d, 1);
+    d.film.spp = 1;
+    const RenderResult r = test::render_desc(d).result;
     ASSERT_GT(r.stats.resolves, 0u);
     const double share = double(r.stats.table_resolves) / double(r.stats.resolves);
     std::printf("[examples] %s: %.1f%% of %llu knit hits from the class table\n", c.name, 100 * share,
