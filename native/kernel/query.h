@@ -396,6 +396,11 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
   int cand_k[KNIT_QUERY_MAX_CAND], cand_g[KNIT_QUERY_MAX_CAND];
   int ncand = 0;
   int next_bi = -1; /* FIRST: the candidate to visit next, when known */
+  /* FIRST: the crossings searched so far (row, closest-point parameter), so
+   * that one found again from a neighbouring piece is not searched twice */
+  float done_t[KNIT_QUERY_MAX_CAND];
+  int done_k[KNIT_QUERY_MAX_CAND];
+  int ndone = 0;
   /* The span of the last candidate (row sp.rw.k, column sp.c, once have_sp):
    * pieces of one cell share it. */
   KSpan sp;
@@ -507,7 +512,7 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
     float bs = K_BIG;
     KnitLineHit h;
     float t;
-    int c;
+    int c, dup;
     if (next_bi >= 0) {
       bi = next_bi;
       bs = cand_s[bi];
@@ -539,7 +544,19 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
     }
     t = knit_piece_closest_t(g, codes, sp, cand_g[bi], o, D, m);
     if (t == K_BIG) continue;
+    /* A crossing found again from another piece of its row (closest points
+     * within 0.1, the unordered loop's test) was searched already: its
+     * entry, if any, is in best or beyond it. */
+    dup = 0;
+    for (i = 0; i < ndone; i++)
+      if (done_k[i] == cand_k[bi] && k_fabs(t - done_t[i]) < KF(0.1)) dup = 1;
+    if (dup != 0) continue;
     h = knit_crossing(g, codes, colors, sp, o, D, t, 0, s_min);
+    if (h.hit != 0) {
+      done_k[ndone] = cand_k[bi];
+      done_t[ndone] = t;
+      ndone = ndone + 1;
+    }
     if (h.hit != 0 && h.s_in >= s_min && h.s_in <= s_max && h.s_in < best.s_in) {
       best = h;
       if (mode == KNIT_QUERY_ANY) break;
