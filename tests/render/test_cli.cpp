@@ -178,6 +178,12 @@ TEST(Cli, RendersKnitWithTheModelAndAsExplicitYarns) {
   // The diffuse preview (a debug option) renders the quad in its first yarn colour ...
   const CliRun p = run(dir, "render " + scene + " -o " + dir + "/preview.exr --quiet --knit-preview-diffuse");
   ASSERT_EQ(p.code, 0) << p.err;
+  // (with --size too: the preview's film is the one asked for)
+  const CliRun ps = run(dir, "render " + scene + " -o " + dir + "/preview_small.exr --quiet --knit-preview-diffuse --size 12x8");
+  ASSERT_EQ(ps.code, 0) << ps.err;
+  const RgbImage small_preview = read_rgb_image(dir + "/preview_small.exr");
+  EXPECT_EQ(small_preview.width, 12);
+  EXPECT_EQ(small_preview.height, 8);
   auto red_pixels = [](const RgbImage& img) {
     int n = 0;
     for (const Rgb& c : img.pixels) n += c.r > 1.5f * c.b;
@@ -323,6 +329,28 @@ TEST(Cli, MaskObjectAndCompareWithAMask) {
   EXPECT_EQ(mask.at(0, 0).r, 0.0f);
   EXPECT_GT(full, 50);
   EXPECT_GT(empty, 20);
+  // --size widens the mask's film as it widens a render's: the middle 24
+  // columns of a 48 x 16 mask are the 24 x 16 mask, up to the edge pixels'
+  // coverage, which other samples estimate (measured: 22 of 384 differ,
+  // none between empty and full, mean |difference| 0.014).
+  const CliRun wide = run(dir, "render " + scene + " -o " + dir + "/mask_wide.exr --quiet --mask-object cloth --size 48x16");
+  ASSERT_EQ(wide.code, 0) << wide.err;
+  const RgbImage wmask = read_rgb_image(dir + "/mask_wide.exr");
+  ASSERT_EQ(wmask.width, 48);
+  ASSERT_EQ(wmask.height, 16);
+  int differ = 0, swapped = 0;
+  double diff_sum = 0;
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 24; ++x) {
+      const float a = wmask.at(x + 12, y).r, b = mask.at(x, y).r;
+      differ += std::fabs(a - b) > 1e-4f;
+      swapped += std::fabs(a - b) == 1.0f;
+      diff_sum += std::fabs(a - b);
+    }
+  std::printf("[size] mask: %d of 384 pixels differ, mean |difference| %.4f\n", differ, diff_sum / 384);
+  EXPECT_EQ(swapped, 0);
+  EXPECT_LT(diff_sum / 384, 0.03);
+  EXPECT_LT(differ, 384 / 8);
 
   // Images equal inside the mask and different outside: no error with the mask.
   RgbImage a(mask.width, mask.height), b(mask.width, mask.height);
