@@ -396,8 +396,9 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
   int cand_k[KNIT_QUERY_MAX_CAND], cand_g[KNIT_QUERY_MAX_CAND];
   int ncand = 0;
   int next_bi = -1; /* FIRST: the candidate to visit next, when known */
-  /* FIRST: the crossings searched so far (row, closest-point parameter), so
-   * that one found again from a neighbouring piece is not searched twice */
+  /* FIRST: the crossings whose search gave an entry (row, closest-point
+   * parameter), so that one found again from a neighbouring piece is not
+   * searched twice */
   float done_t[KNIT_QUERY_MAX_CAND];
   int done_k[KNIT_QUERY_MAX_CAND];
   int ndone = 0;
