@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# Fuzzes the pattern parser or the scene parser with libFuzzer
-# (docs/patterns.md and docs/scene-format.md, "Fuzzing").
+# Fuzzes the pattern parser, the scene parser, the mesh loader or the
+# geometric queries with libFuzzer (docs/patterns.md, docs/scene-format.md
+# and docs/geometry.md, "Fuzzing").
 #
 #   scripts/fuzz.sh [SECONDS] [BUILD_DIR] [TARGET]   default 600 s, build-fuzz, pattern
 #
-# TARGET is `pattern`, `scene` or `mesh`. Configures a separate clang build with
+# TARGET is `pattern`, `scene`, `mesh` or `query`. Configures a separate clang build with
 # -DKNIT_FUZZ=ON, runs `fuzz_TARGET` for SECONDS on a scratch copy of
 # tests/fuzz/corpus/TARGET, then merges the inputs that add coverage back
 # into that corpus (-merge=1). Crashes land in
@@ -19,9 +20,9 @@ seconds="${1:-600}"
 build="${2:-build-fuzz}"
 target="${3:-pattern}"
 case "$target" in
-  pattern) renderer=OFF ;;
+  pattern | query) renderer=OFF ;;
   scene | mesh) renderer=ON ;;
-  *) echo "scripts/fuzz.sh: unknown target '$target' (pattern, scene or mesh)" >&2; exit 2 ;;
+  *) echo "scripts/fuzz.sh: unknown target '$target' (pattern, scene, mesh or query)" >&2; exit 2 ;;
 esac
 jobs="${FUZZ_JOBS:-1}"
 max_len="${FUZZ_MAX_LEN:-9000}"

@@ -432,12 +432,30 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
   for (k = k0; k <= k1; k++) {
     float last_t = -K_BIG, prev_t = -K_BIG;
     KRow rw = knit_row(g, k);
+    float ru0 = K_BIG, ru1 = -K_BIG, xr0, xr1, xm;
+    int rg0, rg1;
     for (j = 0; j < 8; j++) {
       kvec3 uy = knit_slab_range((rw.yk + oyl[j]) - rr, (rw.yk + oyh[j]) + rr, KY(pa), KY(inv));
       uyl[j] = k_fmax(ul0, KX(uy));
       uyh[j] = k_fmin(ul1, KY(uy));
+      if (uyl[j] <= uyh[j]) {
+        ru0 = k_fmin(ru0, uyl[j]);
+        ru1 = k_fmax(ru1, uyh[j]);
+      }
     }
-    for (gp = g0; gp <= g1; gp++) {
+    if (ru0 > ru1) continue; /* the segment misses the row's band */
+    /* The pieces of this row the slab tests below can pass: those within
+     * the segment's x extent over the part of it in the row's band, widened
+     * by r, the loop's reach a and, against rounding, two pieces and 1e-6 of
+     * the coordinates. Without it a long slanted segment would test every
+     * piece of its bounding box in every row (rows x pieces, not rows +
+     * pieces); the pieces skipped all fail the x slab test. */
+    xr0 = KX(pa) + (KX(pb) - KX(pa)) * ru0;
+    xr1 = KX(pa) + (KX(pb) - KX(pa)) * ru1;
+    xm = rr + xa + KF(2.0) * KNIT_PIECE_LEN + KF(1.0e-6) * (k_fabs(KX(pa)) + k_fabs(KX(pb)));
+    rg0 = KINT(k_floor((k_fmin(xr0, xr1) - xm) / KNIT_PIECE_LEN));
+    rg1 = KINT(k_floor((k_fmax(xr0, xr1) + xm) / KNIT_PIECE_LEN));
+    for (gp = k_maxi(g0, rg0); gp <= k_mini(g1, rg1); gp++) {
       float t, u, t0 = KFLT(gp) * K_PI_4, t_start = KF(0.0);
       int jp = gp & 7;
       kvec3 ux;

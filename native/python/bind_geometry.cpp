@@ -193,8 +193,8 @@ class PyKnitSurface {
     }
     if (max_steps < 1 || max_steps > 4096)
       throw ::py::value_error("max_steps must be in [1, 4096], got " + std::to_string(max_steps));
-    if (!(max_segment > 0) || !std::isfinite(max_segment))
-      throw ::py::value_error("max_segment must be finite and > 0, got " + num(max_segment));
+    if (!(max_segment > 0) || !(max_segment <= kMaxCapmSegment))
+      throw ::py::value_error("max_segment must be > 0 and at most 1000, got " + num(max_segment));
     if (!(max_bend > 0) || !std::isfinite(max_bend))
       throw ::py::value_error("max_bend must be finite and > 0, got " + num(max_bend));
     CapmOptions opt;
@@ -238,8 +238,8 @@ class PyKnitSurface {
       if (!(sh >= 0 && sh < 1)) throw ::py::value_error("shift components must be in [0, 1), got " + num(sh));
     for (double kk : {kx, ky})
       if (!std::isfinite(kk)) throw ::py::value_error("curvature must be finite, got " + num(kk));
-    if (!(max_segment > 0) || !std::isfinite(max_segment))
-      throw ::py::value_error("max_segment must be finite and > 0, got " + num(max_segment));
+    if (!(max_segment > 0) || !(max_segment <= kMaxCapmSegment))
+      throw ::py::value_error("max_segment must be > 0 and at most 1000, got " + num(max_segment));
     if (max_steps < 1 || max_steps > 4096)
       throw ::py::value_error("max_steps must be in [1, 4096], got " + std::to_string(max_steps));
     const float sc = float(uv_scale_);

@@ -216,7 +216,8 @@ KnitDesc parse_knit_material(JsonObject& o, const std::string& dir, bool class_t
   if (auto c = o.get("capm_options")) {
     JsonObject co(*c);
     mp.capm_options.max_steps = static_cast<int>(co.integer("max_steps", 1, 4096, mp.capm_options.max_steps));
-    mp.capm_options.max_segment = co.number("max_segment", Range::left_open(0, 1e3), mp.capm_options.max_segment);
+    mp.capm_options.max_segment =
+        co.number("max_segment", Range::left_open(0, kMaxCapmSegment), mp.capm_options.max_segment);
     mp.capm_options.max_bend = co.number("max_bend", Range::left_open(0, 3.14159265f), mp.capm_options.max_bend);
     co.finish();
   }

@@ -301,6 +301,52 @@ TEST(Stitch, FirstEntryQueryFindsWhatTheFullQueryFinds) {
   std::printf("[ any ] %d hits, of which ANY stopped at a later entry than FIRST's in %d\n", hits, any_later);
 }
 
+// Long slanted segments: each row looks only at the pieces within the
+// segment's x extent across that row's band (rows plus pieces, not rows
+// times pieces). The first entry along a 2,000-unit segment must be the
+// first entry found along its 25-unit pieces in turn, and a hit or a miss
+// the same; with slip stitches too.
+TEST(Stitch, LongSegmentsFindTheEntryTheirPiecesFind) {
+  int far_all = 0;
+  for (const Pattern& p : {test::seed(), test::slip_floats()}) {
+    KnitSurface s = make(p);
+    std::mt19937 rng(29);
+    std::uniform_real_distribution<float> U(0, 1);
+    int hits = 0, agree = 0, far = 0, n = 0;
+    for (int i = 0; i < 200; ++i) {
+      const float len = 2000.0f, ph = 6.2831853f * U(rng);
+      const float top = s.shell_top();
+      // from the shell's top down by 1-21% of its depth over the whole length
+      const float dz = -2 * top * (0.01f + 0.2f * U(rng)) / len;
+      const float hs = std::sqrt(1 - dz * dz);
+      const k::kvec3 o = k::kv3(-1000 + 2000 * U(rng), -1000 + 2000 * U(rng), top * 0.999f);
+      const k::kvec3 D = k::kv3(hs * std::cos(ph), hs * std::sin(ph), dz);
+      const k::KnitLineHit whole = k::knit_line_query(s.geom(), s.codes(), s.colors(), o, D, 0, len, KNIT_QUERY_FIRST);
+      k::KnitLineHit piecewise = k::knit_line_hit_none();
+      for (float a = 0; a < len && !piecewise.hit; a += 25.0f)
+        piecewise = k::knit_line_query(s.geom(), s.codes(), s.colors(), o, D, a, std::min(len, a + 25.0f),
+                                       KNIT_QUERY_FIRST);
+      ASSERT_EQ(whole.hit, piecewise.hit) << "segment " << i;
+      const k::KnitLineHit any = k::knit_line_query(s.geom(), s.codes(), s.colors(), o, D, 0, len, KNIT_QUERY_ANY);
+      ASSERT_EQ(any.hit, whole.hit) << "segment " << i;
+      if (whole.hit) {
+        ++hits;
+        agree += std::abs(whole.s_in - piecewise.s_in) < 1e-3f * s.params().r;
+        far += whole.s_in > 100;
+      }
+      ++n;
+    }
+    std::printf("[long] %d segments of 2000 units, %d hits (%d beyond 100 units), %d entries within 1e-3 r of the "
+                "pieces'\n", n, hits, far, agree);
+    EXPECT_GT(hits, n / 4);
+    EXPECT_GE(agree, hits * 99 / 100);
+    far_all += far;
+  }
+  // (seed's loops all reach the shell's top, so its entries come within a
+  // few stitches; the floats' shell is deeper)
+  EXPECT_GT(far_all, 20) << "entries far along the segments";
+}
+
 // The same chord bound in three dimensions, which lets every line query skip
 // the cubic for a piece the line passes far from: a piece is dismissed only
 // when the interpolant's true distance from the line (double precision,

@@ -938,6 +938,8 @@ class KnitMaterialInterface(unittest.TestCase):
              "KnitMaterialParams.footprint_points = 0"),
             (lambda: knitshade.KnitMaterial(knitshade.Pattern(), max_steps=0), ValueError,
              "KnitMaterialParams.capm_options.max_steps = 0"),
+            (lambda: knitshade.KnitMaterial(knitshade.Pattern(), max_segment=5000.0), ValueError,
+             "KnitMaterialParams.capm_options.max_segment = 5000: must be > 0 and at most 1000"),
             (lambda: knitshade.KnitMaterial(two_colours), ValueError,
              "the pattern uses 2 colour indices but 1 yarn colours are given"),
             (lambda: knitshade.KnitMaterial(knitshade.Pattern(), bsdf=dict(eta=9.0)), ValueError,

@@ -129,6 +129,12 @@ class QueryTest(unittest.TestCase):
             self.surf.crossings(1.0, -4e4)
         with self.assertRaises(ValueError):
             self.surf.capm(np.array([5e4]), np.array([1.0]), np.array([0.0, 0.0, 1.0]))
+        # A segment's query costs in proportion to its length: the longest
+        # accepted is 1000 pattern units, as in the scene format.
+        for bad in (1001.0, 1e9, float("inf"), float("nan"), 0.0):
+            with self.assertRaises(ValueError) as cm:
+                self.surf.capm(np.array([1.0]), np.array([1.0]), np.array([0.0, 0.0, 1.0]), max_segment=bad)
+            self.assertIn("max_segment must be > 0 and at most 1000", str(cm.exception))
         far = knitshade.KnitSurface(seed_pattern(), self.params, uv_scale=100.0)
         with self.assertRaises(ValueError) as cm:
             far.query(400.0, 1.0)

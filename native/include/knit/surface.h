@@ -80,6 +80,12 @@ class SphereFrame final : public FrameProvider {
 // piece indices would no longer fit an int.
 inline constexpr float kMaxPatternCoord = 32768.0f;
 
+// Longest CAPM segment the hosts accept (CapmOptions::max_segment, pattern
+// units; the scene format's bound too). A line query's work grows with its
+// segment's length (rows plus pieces along it), so a segment of a million
+// units would take a third of a second per query.
+inline constexpr float kMaxCapmSegment = 1000.0f;
+
 struct CapmOptions {
   int max_steps = 32;           // hard cap on marched segments
   float max_segment = 6.2832f;  // longest segment, pattern units of horizontal travel
