@@ -1,8 +1,8 @@
 // libFuzzer harness for the geometric queries (docs/geometry.md): a small
-// pattern and stitch parameters from the input, then line queries of every
-// mode, vertical queries, the batch and CAPM marches at points and
-// directions taken from the input's bytes as raw floats (NaN, infinities,
-// denormals and 1e38s included). Parameters the boundary rejects end the
+// pattern, stitch parameters and a base (flat, cylinder or sphere) from the
+// input, then line queries of every mode, vertical queries, the batch and
+// CAPM marches at points and directions taken from the input's bytes as raw
+// floats (NaN, infinities, denormals and 1e38s included). Parameters the boundary rejects end the
 // input (std::invalid_argument); whatever is accepted must give results
 // that are finite where they are defined, inside the range asked for, with
 // unit normals and valid cells, and must not crash, hang or trip the
@@ -95,6 +95,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   const knit::KnitSurface& s = *surface;
   const k::KnitGeom& g = s.geom();
+  // The base the CAPM marches bend with: flat, or a cylinder or sphere of any
+  // radius Python accepts (finite and > 0, 1e-38 and 3e38 included).
+  const int base = in.byte() % 3;
+  const float radius = in.f32();
+  std::unique_ptr<knit::FrameProvider> frame;
+  if (base == 1 && std::isfinite(radius) && radius > 0) frame = std::make_unique<knit::CylinderFrame>(radius);
+  if (base == 2 && std::isfinite(radius) && radius > 0) frame = std::make_unique<knit::SphereFrame>(radius);
   std::vector<float> xs, ys;
   // Queries of 7 floats and a mode byte each, at most 16.
   for (int q = 0; q < 16 && in.n >= 29; ++q) {
@@ -135,7 +142,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       // CAPM from (ox, oy) looking along -D's mirror above the surface.
       const knit::Vec3 wi{D.x, D.y, std::fabs(D.z) + 1e-3f};
       const float wn = std::sqrt(wi.x * wi.x + wi.y * wi.y + wi.z * wi.z);
-      check_hit(s.capm(ox, oy, {wi.x / wn, wi.y / wn, wi.z / wn}), s, where + " capm");
+      check_hit(s.capm(ox, oy, {wi.x / wn, wi.y / wn, wi.z / wn}, frame.get()), s, where + " capm");
     }
   }
   if (!xs.empty()) {
