@@ -142,7 +142,18 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       // CAPM from (ox, oy) looking along -D's mirror above the surface.
       const knit::Vec3 wi{D.x, D.y, std::fabs(D.z) + 1e-3f};
       const float wn = std::sqrt(wi.x * wi.x + wi.y * wi.y + wi.z * wi.z);
-      check_hit(s.capm(ox, oy, {wi.x / wn, wi.y / wn, wi.z / wn}, frame.get()), s, where + " capm");
+      const knit::Vec3 wl{wi.x / wn, wi.y / wn, wi.z / wn};
+      check_hit(s.capm(ox, oy, wl, frame.get()), s, where + " capm");
+      // The same march as a shadow ray asks it (blocked_only: ANY queries,
+      // no corrector), from inside the shell at height oz along D.
+      if (std::fabs(oz) < s.shell_top() && std::isfinite(ox) && std::isfinite(oy) &&
+          std::fabs(ox) < knit::kMaxPatternCoord && std::fabs(oy) < knit::kMaxPatternCoord) {
+        const k::KnitCapm st = s.march(k::knit_capm_begin_at(k::kv3(ox, oy, oz), D), D, frame.get(), {}, true);
+        if (st.state < KNIT_CAPM_MARCHING || st.state > KNIT_CAPM_LIMIT) fail("march state out of range", where);
+        if (st.state == KNIT_CAPM_HIT && (!finite3(st.hit.p) || !(st.hit.s_in >= 0.0f)))
+          fail("blocked march: bad hit", where);
+        if (!finite3(st.p)) fail("blocked march: non-finite position", where);
+      }
     }
   }
   if (!xs.empty()) {
