@@ -140,7 +140,9 @@ class KnitSurface {
   // midpoint corrector that places it (knit_capm_correct: one more line
   // query per hit on a curved base). The state's hit is then only a hit.
   // frame_hint: where the frame lookups may start (FrameProvider::frame_near;
-  // BaseHit::frame_hint), -1 when unknown.
+  // BaseHit::frame_hint), -1 when unknown. Throws std::invalid_argument for
+  // options out of range (max_steps < 1, max_segment outside
+  // (0, kMaxCapmSegment], max_bend <= 0).
   k::KnitCapm march(k::KnitCapm start, Vec3 ray_world, const FrameProvider* frame,
                     const CapmOptions& opt = {}, bool blocked_only = false, int64_t frame_hint = -1) const;
   SurfaceHit to_hit(const k::KnitCapm& st) const;
