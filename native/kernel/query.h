@@ -569,7 +569,7 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
      * with slip stitches, where a search from the other piece found a
      * better entry in 3 of 40,000 segments: docs/geometry.md.) */
     dup = 0;
-    for (i = 0; i < ndone; i++)
+    for (i = 0; i < ndone && dup == 0; i++)
       if (done_k[i] == cand_k[bi] && k_fabs(t - done_t[i]) < KF(0.1)) dup = 1;
     if (dup != 0) continue;
     h = knit_crossing(g, codes, colors, sp, o, D, t, 0, s_min);

@@ -29,6 +29,13 @@ void check_finite(const char* what, const double* p, ssize_t n) {
                               num(p[i]));
 }
 
+// CAPM's segment length, as KnitSurface::march bounds it (kMaxCapmSegment).
+void check_max_segment(double max_segment) {
+  if (!(max_segment > 0) || !(max_segment <= kMaxCapmSegment))
+    throw ::py::value_error("max_segment must be > 0 and at most " + num(kMaxCapmSegment) + ", got " +
+                            num(max_segment));
+}
+
 // Broadcast u and v (scalars or 1-D arrays of one length) to N points.
 struct Points {
   Arr u, v;
@@ -193,8 +200,7 @@ class PyKnitSurface {
     }
     if (max_steps < 1 || max_steps > 4096)
       throw ::py::value_error("max_steps must be in [1, 4096], got " + std::to_string(max_steps));
-    if (!(max_segment > 0) || !(max_segment <= kMaxCapmSegment))
-      throw ::py::value_error("max_segment must be > 0 and at most 1000, got " + num(max_segment));
+    check_max_segment(max_segment);
     if (!(max_bend > 0) || !std::isfinite(max_bend))
       throw ::py::value_error("max_bend must be finite and > 0, got " + num(max_bend));
     CapmOptions opt;
@@ -238,8 +244,7 @@ class PyKnitSurface {
       if (!(sh >= 0 && sh < 1)) throw ::py::value_error("shift components must be in [0, 1), got " + num(sh));
     for (double kk : {kx, ky})
       if (!std::isfinite(kk)) throw ::py::value_error("curvature must be finite, got " + num(kk));
-    if (!(max_segment > 0) || !(max_segment <= kMaxCapmSegment))
-      throw ::py::value_error("max_segment must be > 0 and at most 1000, got " + num(max_segment));
+    check_max_segment(max_segment);
     if (max_steps < 1 || max_steps > 4096)
       throw ::py::value_error("max_steps must be in [1, 4096], got " + std::to_string(max_steps));
     const float sc = float(uv_scale_);

@@ -131,7 +131,8 @@ k::KnitCapm KnitSurface::march(k::KnitCapm start, Vec3 ray_world, const FramePro
   static const FlatFrame flat_frame;
   const FrameProvider& fp = frame ? *frame : flat_frame;
   if (!(opt.max_steps >= 1) || !(opt.max_segment > 0) || !(opt.max_segment <= kMaxCapmSegment) || !(opt.max_bend > 0))
-    throw std::invalid_argument("CapmOptions: max_steps must be >= 1, max_segment in (0, 1000] and max_bend > 0");
+    throw std::invalid_argument("CapmOptions: max_steps must be >= 1, max_segment in (0, " +
+                                std::to_string(int(kMaxCapmSegment)) + "] and max_bend > 0");
   int64_t hint = frame_hint;  // the march's lookups stay close together (and near the base hit)
   const Vec3 kappa = fp.curvature_near(start.p.x, start.p.y, hint);
   const float kmax = std::max(std::abs(kappa.x), std::abs(kappa.y));
