@@ -114,6 +114,124 @@ struct Work {
 constexpr float kBig = 1.0e30f;
 constexpr int kBlock = 1024;  // points per pass through the stages
 
+// Stage 1's candidates by where a point lies in its stitch cell. Which
+// (row, piece) pairs can come near a vertical line depends on the line's
+// place within one period of the geometry (2 pi in x, a row spacing s in
+// y) and on a, h, d and r, not on the pattern (x and y of knit and purl
+// yarns are the same). The period is cut into kBinsX x kBinsY bins; each
+// bin lists, as bits, the pairs (row offset, piece offset from the cell's
+// first piece) that pass stage 1's box and chord culls and come within the
+// closest-point threshold r + quad_margin of the piece's quadratic
+// interpolant, for some point of the bin. The tests are made at the bin's
+// centre with the bin's half-extent (and 0.01 for float rounding) added to
+// every distance, so the list is a superset of the pairs any point in the
+// bin keeps: the pairs left out are ones stage 2 would have set aside
+// (farther than the threshold), and results are the same as stage 1
+// without the bins. A bin's bits are row-major, 2^shift bits per row, from
+// its own first row and piece (base), so the pairs come out in the row and
+// piece order stage 2b relies on. Built once per a, h, d, r (on each
+// thread, the first time they are seen): about 0.2 ms.
+struct CandidateBins {
+  static constexpr int kBinsX = 32, kBinsY = 16;
+  bool ok = false;  // false: some bin needs more than 32 bits (stage 1 tests the whole box)
+  int shift = 0;
+  std::vector<int32_t> bits, base;  // per bin (iy * kBinsX + ix): pairs, and (first row << 16) | (first piece & 0xFFFF)
+};
+
+// Lower bound of the distance from p to the quadratic q0 + q1 u + q2 u^2
+// over u in [0, 1]: the nearest of 65 points less half the largest gap
+// between neighbours (|q'| <= |q1| + 2 |q2|).
+double quad_distance_lower(double px, double py, const double q[6]) {
+  double best = 1e300;
+  for (int i = 0; i <= 64; ++i) {
+    const double u = i / 64.0;
+    const double x = q[0] + (q[2] + q[4] * u) * u - px, y = q[1] + (q[3] + q[5] * u) * u - py;
+    best = std::min(best, x * x + y * y);
+  }
+  const double speed = std::hypot(q[2], q[3]) + 2.0 * std::hypot(q[4], q[5]);
+  return std::sqrt(best) - 0.5 * speed / 64.0;
+}
+
+CandidateBins build_candidate_bins(const k::KnitGeom& g) {
+  CandidateBins cb;
+  const double pi4 = M_PI / 4, s = g.row_spacing, a = g.a, h = g.h;
+  const double rr = double(g.r) * 1.001 + 1.0e-4;             // stage 1's box reach
+  const double thr = (double(g.r) + g.quad_margin) * 1.001 + 1.0e-4;  // its chord reach
+  const double mnear = double(g.r) + g.quad_margin;             // stage 2's threshold
+  const double bw = 2 * M_PI / CandidateBins::kBinsX, bh = s / CandidateBins::kBinsY;
+  const double hx = 0.5 * bw, hy = 0.5 * bh, hd = std::hypot(hx, hy), eps = 0.01;
+  // every pair any point of the cell could reach
+  const int dk_lo = int(std::floor((-h - rr) / s - 0.5)) - 1, dk_hi = int(std::ceil((s + h + rr) / s - 0.5)) + 1;
+  const int dg_lo = int(std::floor((-rr - a) / pi4)) - 1, dg_hi = int(std::ceil((2 * M_PI + rr + a) / pi4)) + 1;
+  // per piece place j: box offsets and interpolant (as make_consts, in double)
+  struct Place {
+    double oxl, oxh, oyl, oyh, q[6];
+  } pl[8];
+  for (int j = 0; j < 8; ++j) {
+    const k::KBox o = k::knit_piece_offsets_xy(g, j);
+    double nx[3], ny[3];
+    for (int i = 0; i < 3; ++i) {
+      const double tau = (2 * j + i) * (M_PI / 8) - M_PI;
+      nx[i] = (tau - (j * pi4 - M_PI)) + a * std::sin(2 * tau);
+      ny[i] = h * std::cos(tau);
+    }
+    pl[j] = {o.lo.x, o.hi.x, o.lo.y, o.hi.y,
+             {nx[0], ny[0], 4 * nx[1] - 3 * nx[0] - nx[2], 4 * ny[1] - 3 * ny[0] - ny[2],
+              2 * (nx[0] - 2 * nx[1] + nx[2]), 2 * (ny[0] - 2 * ny[1] + ny[2])}};
+  }
+  struct Pair {
+    int dk, dg;
+  };
+  std::vector<std::vector<Pair>> lists(size_t(CandidateBins::kBinsX * CandidateBins::kBinsY));
+  int span_k = 1, span_g = 1;
+  for (int iy = 0; iy < CandidateBins::kBinsY; ++iy)
+    for (int ix = 0; ix < CandidateBins::kBinsX; ++ix) {
+      const double xc = (ix + 0.5) * bw, yc = (iy + 0.5) * bh;
+      auto& L = lists[size_t(iy * CandidateBins::kBinsX + ix)];
+      for (int dk = dk_lo; dk <= dk_hi; ++dk) {
+        const double yk = (dk + 0.5) * s;
+        for (int dg = dg_lo; dg <= dg_hi; ++dg) {
+          const int j = dg & 7;
+          const Place& P = pl[j];
+          const double t0 = dg * pi4;
+          // the box, grown by the bin's half-extent
+          if (xc + hx < t0 + P.oxl - rr - eps || xc - hx > t0 + pi4 + P.oxh + rr + eps) continue;
+          if (yc + hy < yk + P.oyl - rr - eps || yc - hy > yk + P.oyh + rr + eps) continue;
+          // the interpolant within the threshold (which also bounds the chord test)
+          if (quad_distance_lower(xc - t0, yc - yk, P.q) - hd - eps > std::max(mnear, thr)) continue;
+          L.push_back({dk, dg});
+        }
+      }
+      if (L.empty()) continue;
+      int klo = L.front().dk, khi = L.back().dk, glo = L.front().dg, ghi = L.front().dg;
+      for (const Pair& p : L) {
+        glo = std::min(glo, p.dg);
+        ghi = std::max(ghi, p.dg);
+      }
+      span_k = std::max(span_k, khi - klo + 1);
+      span_g = std::max(span_g, ghi - glo + 1);
+    }
+  int shift = 0;
+  while ((1 << shift) < span_g) ++shift;
+  if ((span_k << shift) > 32) return cb;  // (very wide loops: no bins)
+  cb.shift = shift;
+  cb.bits.assign(lists.size() + 16, 0);  // (slack: a gather never reads past it, but keep the tail defined)
+  cb.base.assign(lists.size() + 16, 0);
+  for (size_t b = 0; b < lists.size(); ++b) {
+    const auto& L = lists[b];
+    if (L.empty()) continue;
+    int glo = L.front().dg;
+    for (const Pair& p : L) glo = std::min(glo, p.dg);
+    const int klo = L.front().dk;
+    uint32_t bits = 0;
+    for (const Pair& p : L) bits |= 1u << (((p.dk - klo) << shift) + (p.dg - glo));
+    cb.bits[b] = int32_t(bits);
+    cb.base[b] = int32_t((uint32_t(klo) << 16) | (uint32_t(glo) & 0xFFFFu));
+  }
+  cb.ok = true;
+  return cb;
+}
+
 // GCC 12 reports the deliberately undefined first operand of its own
 // AVX-512 intrinsics (_mm512_undefined_ps) as uninitialised once inlined.
 #pragma GCC diagnostic push
