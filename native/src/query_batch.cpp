@@ -130,7 +130,7 @@ constexpr int kBlock = 1024;  // points per pass through the stages
 // without the bins. A bin's bits are row-major, 2^shift bits per row, from
 // its own first row and piece (base), so the pairs come out in the row and
 // piece order stage 2b relies on. Built once per a, h, d, r (on each
-// thread, the first time they are seen): about 0.2 ms.
+// thread, candidate_bins below): about 0.3 ms.
 struct CandidateBins {
   static constexpr int kBinsX = 32, kBinsY = 16;
   bool ok = false;  // false: some bin needs more than 32 bits (stage 1 tests the whole box)
@@ -139,17 +139,23 @@ struct CandidateBins {
 };
 
 // Lower bound of the distance from p to the quadratic q0 + q1 u + q2 u^2
-// over u in [0, 1]: the nearest of 65 points less half the largest gap
-// between neighbours (|q'| <= |q1| + 2 |q2|).
-double quad_distance_lower(double px, double py, const double q[6]) {
+// over u in [0, 1], given speed >= |q'| = |q1 + 2 q2 u|: the nearest of
+// n + 1 evenly spaced points less half the gap between neighbours. A
+// first bound from its chord q0 + (q1 + q2) u, which the quadratic leaves
+// by at most |q2| / 4.
+double quad_distance_lower(double px, double py, const double q[6], double speed, int n) {
+  const double ax = px - q[0], ay = py - q[1], cx = q[2] + q[4], cy = q[3] + q[5];
+  const double l2 = cx * cx + cy * cy;
+  const double u = l2 > 0 ? std::min(1.0, std::max(0.0, (ax * cx + ay * cy) / l2)) : 0.0;
+  const double chord = std::hypot(ax - u * cx, ay - u * cy) - 0.25 * std::hypot(q[4], q[5]);
+  if (n <= 0) return chord;
   double best = 1e300;
-  for (int i = 0; i <= 64; ++i) {
-    const double u = i / 64.0;
-    const double x = q[0] + (q[2] + q[4] * u) * u - px, y = q[1] + (q[3] + q[5] * u) * u - py;
+  for (int i = 0; i <= n; ++i) {
+    const double v = double(i) / n;
+    const double x = q[0] + (q[2] + q[4] * v) * v - px, y = q[1] + (q[3] + q[5] * v) * v - py;
     best = std::min(best, x * x + y * y);
   }
-  const double speed = std::hypot(q[2], q[3]) + 2.0 * std::hypot(q[4], q[5]);
-  return std::sqrt(best) - 0.5 * speed / 64.0;
+  return std::max(chord, std::sqrt(best) - 0.5 * speed / n);
 }
 
 CandidateBins build_candidate_bins(const k::KnitGeom& g) {
@@ -165,7 +171,7 @@ CandidateBins build_candidate_bins(const k::KnitGeom& g) {
   const int dg_lo = int(std::floor((-rr - a) / pi4)) - 1, dg_hi = int(std::ceil((2 * M_PI + rr + a) / pi4)) + 1;
   // per piece place j: box offsets and interpolant (as make_consts, in double)
   struct Place {
-    double oxl, oxh, oyl, oyh, q[6];
+    double oxl, oxh, oyl, oyh, q[6], speed;
   } pl[8];
   for (int j = 0; j < 8; ++j) {
     const k::KBox o = k::knit_piece_offsets_xy(g, j);
@@ -177,7 +183,9 @@ CandidateBins build_candidate_bins(const k::KnitGeom& g) {
     }
     pl[j] = {o.lo.x, o.hi.x, o.lo.y, o.hi.y,
              {nx[0], ny[0], 4 * nx[1] - 3 * nx[0] - nx[2], 4 * ny[1] - 3 * ny[0] - ny[2],
-              2 * (nx[0] - 2 * nx[1] + nx[2]), 2 * (ny[0] - 2 * ny[1] + ny[2])}};
+              2 * (nx[0] - 2 * nx[1] + nx[2]), 2 * (ny[0] - 2 * ny[1] + ny[2])},
+             0.0};
+    pl[j].speed = std::hypot(pl[j].q[2], pl[j].q[3]) + 2.0 * std::hypot(pl[j].q[4], pl[j].q[5]);
   }
   struct Pair {
     int dk, dg;
@@ -198,7 +206,10 @@ CandidateBins build_candidate_bins(const k::KnitGeom& g) {
           if (xc + hx < t0 + P.oxl - rr - eps || xc - hx > t0 + pi4 + P.oxh + rr + eps) continue;
           if (yc + hy < yk + P.oyl - rr - eps || yc - hy > yk + P.oyh + rr + eps) continue;
           // the interpolant within the threshold (which also bounds the chord test)
-          if (quad_distance_lower(xc - t0, yc - yk, P.q) - hd - eps > std::max(mnear, thr)) continue;
+          // (a coarse bound first: most pairs in the box are far from it)
+          const double reach = std::max(mnear, thr) + hd + eps;
+          if (quad_distance_lower(xc - t0, yc - yk, P.q, P.speed, 0) > reach) continue;
+          if (quad_distance_lower(xc - t0, yc - yk, P.q, P.speed, 32) > reach) continue;
           L.push_back({dk, dg});
         }
       }
@@ -230,6 +241,28 @@ CandidateBins build_candidate_bins(const k::KnitGeom& g) {
   }
   cb.ok = true;
   return cb;
+}
+
+// The bins of the stitch g (a, h, d and r): the last four stitches seen on
+// this thread are kept, so calls alternating between surfaces do not build
+// them again.
+const CandidateBins& candidate_bins(const k::KnitGeom& g) {
+  struct Slot {
+    float a = 0, h = 0, d = 0, r = 0;  // (a = 0: empty; no valid stitch has it)
+    CandidateBins bins;
+  };
+  static thread_local Slot slots[4];
+  static thread_local int next = 0;
+  for (Slot& sl : slots)
+    if (sl.a == g.a && sl.h == g.h && sl.d == g.d && sl.r == g.r) return sl.bins;
+  Slot& sl = slots[next];
+  next = (next + 1) % 4;
+  sl.bins = build_candidate_bins(g);
+  sl.a = g.a;
+  sl.h = g.h;
+  sl.d = g.d;
+  sl.r = g.r;
+  return sl.bins;
 }
 
 // GCC 12 reports the deliberately undefined first operand of its own
