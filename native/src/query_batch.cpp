@@ -18,9 +18,9 @@
 //      entry (the maximum of z(t) + sqrt(r^2 - rho(t)^2)) on the exact curve,
 //      depth signs and blends included. Each lane takes the next crossing
 //      as soon as its search ends (one curve evaluation per lane per round).
-//   4. per point: the layer count and the first entry.
-//   5. each point's first entry evaluated again at its final parameter:
-//      position, normal, tangent and cell.
+//      A search writes its entry's height, normal, tangent and column
+//      when it ends, from the curve evaluation it ends on.
+//   4. per point: the layer count and the first entry, with its cell.
 // A vertical line's distance to a knit or purl yarn lies in x and y, which
 // do not depend on the codes (stitch.h), so stages 1-2 never read the
 // pattern; the crossings take the depth signs of the three cells around
@@ -91,12 +91,11 @@ struct Work {
   // the span's three cells (3 bits each)
   std::vector<float> l_t, l_x, l_y, l_yk;
   std::vector<int32_t> l_c, l_cs, l_k, l_bits;
-  // stage 3: entries, in the order the lanes finish them, with their live slot
-  std::vector<int32_t> o_slot, o_hit;
-  std::vector<float> o_sin, o_t;
-  // stage 5: the entry each point keeps (by point, in point order)
-  std::vector<int32_t> b_pt, b_o, b_row, b_col, b_code, b_colour;
-  std::vector<float> b_pz, b_nx, b_ny, b_nz, b_tx, b_ty, b_tz;
+  // stage 3: entries, in the order the lanes finish them, with their live
+  // slot: whether a crossing was found, the entry distance below the shell
+  // top, and the column, normal and tangent there
+  std::vector<int32_t> o_slot, o_hit, o_col;
+  std::vector<float> o_sin, o_nx, o_ny, o_nz, o_tx, o_ty, o_tz;
   std::vector<int32_t> pos_of;  // live slot -> index in the o_ arrays
 
   // Room for `need` candidates (and slack for the full-width stores and
@@ -104,10 +103,9 @@ struct Work {
   void reserve(size_t need) {
     const size_t cap = need + 32;
     if (pt.size() >= cap) return;
-    for (auto* v : {&pt, &row, &piece, &inside, &use, &l_c, &l_cs, &l_k, &l_bits, &o_slot, &o_hit, &pos_of, &b_pt,
-                    &b_o, &b_row, &b_col, &b_code, &b_colour})
+    for (auto* v : {&pt, &row, &piece, &inside, &use, &l_c, &l_cs, &l_k, &l_bits, &o_slot, &o_hit, &o_col, &pos_of})
       v->resize(2 * cap, 0);
-    for (auto* v : {&t, &l_t, &l_x, &l_y, &l_yk, &o_sin, &o_t, &b_pz, &b_nx, &b_ny, &b_nz, &b_tx, &b_ty, &b_tz})
+    for (auto* v : {&t, &l_t, &l_x, &l_y, &l_yk, &o_sin, &o_nx, &o_ny, &o_nz, &o_tx, &o_ty, &o_tz})
       v->resize(2 * cap, 0.0f);
   }
 };
