@@ -6,8 +6,9 @@
 //   1. candidates: for every point, the (row, piece) pairs whose piece box
 //      comes within r of the vertical line and whose quadratic interpolant's
 //      chord bound does not rule it out (knit_line_query's culls, in the
-//      same order). Lanes that pass are compressed into a list, so the
-//      costly stages below run on full vectors of live work.
+//      same order), out of the few pairs the point's bin lists
+//      (CandidateBins below). Lanes that pass are compressed into a list,
+//      so the costly stages below run on full vectors of live work.
 //   2. closest points: the cubic of the piece's interpolant (Cardano or
 //      Viete, as cubic.h), one Newton step on the exact curve, and whether
 //      the line passes through the tube there.
@@ -19,7 +20,9 @@
 //      depth signs and blends included. Each lane takes the next crossing
 //      as soon as its search ends (one curve evaluation per lane per round).
 //      A search writes its entry's height, normal, tangent and column
-//      when it ends, from the curve evaluation it ends on.
+//      when it ends, from the curve evaluation it ends on; it may end one
+//      short Newton step before the kernel's would, at the maximum that
+//      step predicts (query_block).
 //   4. per point: the layer count and the first entry, with its cell.
 // A vertical line's distance to a knit or purl yarn lies in x and y, which
 // do not depend on the codes (stitch.h), so stages 1-2 never read the
@@ -27,8 +30,9 @@
 // their piece from KnitSurface::span_bits, one gather each.
 //
 // The same mathematics as the scalar kernel, evaluated in a different
-// order and with fused multiply-adds: results agree with query() up to float
-// rounding, not bit for bit (tests/native/test_query_batch.cpp bounds the
+// order and with fused multiply-adds, and entry searches that may end one
+// short step sooner: results agree with query() up to float rounding and
+// the searches' own tolerance, not bit for bit (tests/native/test_query_batch.cpp bounds the
 // difference for both vector widths, and checks them against the
 // double-precision tube ray casts). Patterns with slip stitches (codes 2,
 // 3), CPUs without AVX2 and FMA, and non-x86 builds take the scalar kernel,
