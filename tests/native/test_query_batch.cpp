@@ -197,6 +197,67 @@ TEST(QueryBatch, SlipStitchesAndTheScalarChoiceTakeTheKernel) {
   }
 }
 
+// Stage 1 takes each point's candidates from the bin of the stitch cell it
+// falls in, unless a lane of its vector lies beyond 1e4 units: then the
+// whole vector tests every pair of the box, as before the bins. The bins
+// must keep every pair the box test keeps that could come near, so the
+// same points must give bit-identical results either way: here once among
+// themselves, and once with a far point in every vector of 8 and of 16.
+TEST(QueryBatch, CandidateBinsGiveWhatTheWholeBoxGives) {
+  if (!KnitSurface::batch_simd_available())
+    GTEST_SKIP() << "this CPU has neither AVX-512 nor AVX2 with FMA: no vector path to check";
+  StitchParams deep;
+  deep.a = 1.5f;
+  deep.h = 3.7f;
+  deep.d = -2.0f;
+  deep.r = 0.22f;
+  StitchParams round;
+  round.a = 1.2f;
+  round.h = 3.6f;
+  round.r = 0.35f;
+  std::vector<KnitSurface::BatchPath> paths = {KnitSurface::BatchPath::Simd};
+  if (KnitSurface::batch_best_isa() == KnitSurface::BatchIsa::Avx512) paths.push_back(KnitSurface::BatchPath::Avx2);
+  for (const StitchParams& sp : {StitchParams{}, deep, round}) {
+    const KnitSurface s(test::pyramid16(), sp);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> U(-300.0f, 300.0f);
+    const int n = 6000;
+    std::vector<float> x(n), y(n), xf, yf;
+    for (int i = 0; i < n; ++i) {
+      x[size_t(i)] = U(rng);
+      y[size_t(i)] = U(rng);
+    }
+    // the same points, with a point at x = 2e4 in every eighth place
+    std::vector<int> at;
+    for (int i = 0; i < n; ++i) {
+      if (xf.size() % 8 == 7) {
+        xf.push_back(2.0e4f);
+        yf.push_back(1.0f);
+      }
+      at.push_back(int(xf.size()));
+      xf.push_back(x[size_t(i)]);
+      yf.push_back(y[size_t(i)]);
+    }
+    for (const KnitSurface::BatchPath path : paths) {
+      SCOPED_TRACE(KnitSurface::batch_isa_name(s.batch_isa(path)));
+      std::vector<SurfaceHit> a(x.size()), b(xf.size());
+      s.query_batch(x.data(), y.data(), x.size(), a.data(), path);
+      s.query_batch(xf.data(), yf.data(), xf.size(), b.data(), path);
+      long hits = 0, differ = 0;
+      for (int i = 0; i < n; ++i) {
+        const SurfaceHit& p = a[size_t(i)];
+        const SurfaceHit& q = b[size_t(at[size_t(i)])];
+        hits += p.hit ? 1 : 0;
+        if (p.hit != q.hit || p.layers != q.layers || p.position.z != q.position.z || p.normal.x != q.normal.x ||
+            p.normal.y != q.normal.y || p.normal.z != q.normal.z || p.row != q.row || p.col != q.col)
+          ++differ;
+      }
+      EXPECT_EQ(differ, 0) << "a " << sp.a << " r " << sp.r;
+      EXPECT_GT(hits, n / 10);
+    }
+  }
+}
+
 TEST(QueryBatch, OddInputsGiveWhatQueryGives) {
   const KnitSurface s(test::rib_1x1(), StitchParams{});
   const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
