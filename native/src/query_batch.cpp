@@ -171,6 +171,10 @@ CandidateBins build_candidate_bins(const k::KnitGeom& g) {
   // every pair any point of the cell could reach
   const int dk_lo = int(std::floor((-h - rr) / s - 0.5)) - 1, dk_hi = int(std::ceil((s + h + rr) / s - 0.5)) + 1;
   const int dg_lo = int(std::floor((-rr - a) / pi4)) - 1, dg_hi = int(std::ceil((2 * M_PI + rr + a) / pi4)) + 1;
+  // Loops this wide (a above about 20) reach more pieces from one bin than
+  // 32 bits hold: no bins, and no time spent finding that out (a = 1000
+  // took 0.1 s).
+  if (dg_hi - dg_lo + 1 > 64 || dk_hi - dk_lo + 1 > 16) return cb;
   // per piece place j: box offsets and interpolant (as make_consts, in double)
   struct Place {
     double oxl, oxh, oyl, oyh, q[6], speed;
