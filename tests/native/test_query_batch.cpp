@@ -29,6 +29,12 @@ std::vector<Named> loop_patterns() {
           {"seed", test::seed()},               {"pyramid16", test::pyramid16()}};
 }
 
+// A short, deep stitch with a thin yarn (steep in depth), and a rounder,
+// shorter one with a thinner yarn than the default.
+// (a, h, d, r)
+StitchParams steep_stitch() { return StitchParams{1.5f, 3.7f, -2.0f, 0.22f}; }
+StitchParams round_stitch() { return StitchParams{1.2f, 3.6f, 1.0f, 0.35f}; }
+
 double angle_deg(Vec3 a, Vec3 b) {
   const double c = double(a.x) * b.x + double(a.y) * b.y + double(a.z) * b.z;
   return std::acos(std::max(-1.0, std::min(1.0, c))) * 180.0 / 3.14159265358979;
@@ -37,15 +43,11 @@ double angle_deg(Vec3 a, Vec3 b) {
 // The vector path `path` (which must run here as `isa`) against query().
 void check_agreement(KnitSurface::BatchPath path, KnitSurface::BatchIsa isa) {
   for (const Named& np : loop_patterns()) {
-    // the default stitch, a thinner tube (gaps between the yarns), and a
-    // short, deep stitch with a thin yarn (steep in depth)
-    StitchParams thin, deep;
+    // the default stitch, a thinner tube (gaps between the yarns), and the
+    // steep stitch
+    StitchParams thin;
     thin.r = 0.4f;
-    deep.a = 1.5f;
-    deep.h = 3.7f;
-    deep.d = -2.0f;
-    deep.r = 0.22f;
-    for (const StitchParams& sp : {StitchParams{}, thin, deep}) {
+    for (const StitchParams& sp : {StitchParams{}, thin, steep_stitch()}) {
       const float r = sp.r;
       const KnitSurface s(np.pattern, sp);
       ASSERT_TRUE(s.batch_isa(path) == isa) << np.name;
@@ -130,10 +132,7 @@ TEST(QueryBatch, Avx2PathAgreesWithTheScalarKernel) {
 TEST(QueryBatch, AlternatingStitchesKeepTheirOwnConstants) {
   if (!KnitSurface::batch_simd_available())
     GTEST_SKIP() << "this CPU has neither AVX-512 nor AVX2 with FMA: no vector path to check";
-  StitchParams other;
-  other.a = 1.2f;
-  other.h = 3.6f;
-  other.r = 0.35f;
+  const StitchParams other = round_stitch();
   const KnitSurface sa(test::seed(), StitchParams{}), sb(test::seed(), other);
   std::vector<float> x, y;
   for (int i = 0; i < 2000; ++i) {
@@ -206,18 +205,9 @@ TEST(QueryBatch, SlipStitchesAndTheScalarChoiceTakeTheKernel) {
 TEST(QueryBatch, CandidateBinsGiveWhatTheWholeBoxGives) {
   if (!KnitSurface::batch_simd_available())
     GTEST_SKIP() << "this CPU has neither AVX-512 nor AVX2 with FMA: no vector path to check";
-  StitchParams deep;
-  deep.a = 1.5f;
-  deep.h = 3.7f;
-  deep.d = -2.0f;
-  deep.r = 0.22f;
-  StitchParams round;
-  round.a = 1.2f;
-  round.h = 3.6f;
-  round.r = 0.35f;
   std::vector<KnitSurface::BatchPath> paths = {KnitSurface::BatchPath::Simd};
   if (KnitSurface::batch_best_isa() == KnitSurface::BatchIsa::Avx512) paths.push_back(KnitSurface::BatchPath::Avx2);
-  for (const StitchParams& sp : {StitchParams{}, deep, round}) {
+  for (const StitchParams& sp : {StitchParams{}, steep_stitch(), round_stitch()}) {
     const KnitSurface s(test::pyramid16(), sp);
     std::mt19937 rng(5);
     std::uniform_real_distribution<float> U(-300.0f, 300.0f);
