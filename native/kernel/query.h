@@ -366,6 +366,7 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
   kvec3 inv = knit_segment_inv(kv3_sub(pb, pa));
   float rr = g.r * KF(1.001) + KF(1.0e-4);
   float m = g.r + g.quad_margin;
+  float mxy = g.r + g.quad_margin_xy; /* (vertical lines, below) */
   /* Clamped (NaN included) so that the index conversions below stay defined;
    * a segment reaching beyond KNIT_MAX_COORD returns a miss. */
   float xmin = k_clampf(k_fmin(KX(pa), KX(pb)), -KNIT_MAX_COORD, KNIT_MAX_COORD);
@@ -483,10 +484,12 @@ KNIT_FN KnitLineHit knit_line_query(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes),
          * knit_piece_closest_t's up to rounding in blended pieces). */
         KQuad qx = knit_loop_piece_quad_xy(g, rw.yk, gp);
         kvec3 cu;
-        /* (with a margin, so that rounding never drops a piece the cubic keeps) */
-        if (knit_quad_xy_beyond(qx, KX(o), KY(o), m * KF(1.001) + KF(1.0e-4)) != 0) continue;
+        /* (with a margin, so that rounding never drops a piece the cubic
+         * keeps; and the margin in x and y alone, quad_margin_xy: a piece
+         * farther than r plus it from the line has no point in the tube) */
+        if (knit_quad_xy_beyond(qx, KX(o), KY(o), mxy * KF(1.001) + KF(1.0e-4)) != 0) continue;
         cu = knit_quad_closest(qx, o, D);
-        if (KY(cu) > m * m) continue;
+        if (KY(cu) > mxy * mxy) continue;
         t_start = qx.t0 + KX(cu) * KNIT_PIECE_LEN;
       }
       c = knit_piece_column(gp);

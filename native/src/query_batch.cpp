@@ -116,36 +116,6 @@ struct Work {
 constexpr float kBig = 1.0e30f;
 constexpr int kBlock = 1024;  // points per pass through the stages
 
-// How far, in x and y, the quadratic interpolant of piece place j (nodes
-// at tau = m pi/8 - pi, m = 2j, 2j+1, 2j+2, as make_consts) strays from the
-// curve x = t + a sin 2t, y = h cos t over the piece, plus 5% and 1e-3 for
-// the sampling (2,001 points, less than the distance two neighbours could
-// hide: both curves move by at most (1 + 2a) + h per unit of t) and float
-// rounding. The vertical query needs this, not the kernel's quad_margin,
-// which bounds the three-dimensional gap for every query direction: for
-// Crane's stitch 0.04 against 0.19. A candidate whose interpolant stays
-// farther than r plus this from the line has no point of its piece inside
-// the tube.
-double piece_xy_margin(double a, double h, int j) {
-  double nx[3], ny[3];
-  for (int i = 0; i < 3; ++i) {
-    const double tau = (2 * j + i) * (M_PI / 8) - M_PI;
-    nx[i] = (tau - (j * (M_PI / 4) - M_PI)) + a * std::sin(2 * tau);
-    ny[i] = h * std::cos(tau);
-  }
-  const double q1x = 4 * nx[1] - 3 * nx[0] - nx[2], q1y = 4 * ny[1] - 3 * ny[0] - ny[2];
-  const double q2x = 2 * (nx[0] - 2 * nx[1] + nx[2]), q2y = 2 * (ny[0] - 2 * ny[1] + ny[2]);
-  const int n = 2000;
-  double dev = 0;
-  for (int i = 0; i <= n; ++i) {
-    const double u = double(i) / n, tau = (j * (M_PI / 4) - M_PI) + u * (M_PI / 4);
-    const double cx = (tau - (j * (M_PI / 4) - M_PI)) + a * std::sin(2 * tau), cy = h * std::cos(tau);
-    dev = std::max(dev, std::hypot(nx[0] + (q1x + q2x * u) * u - cx, ny[0] + (q1y + q2y * u) * u - cy));
-  }
-  const double speed = std::hypot(q1x, q1y) + 2 * std::hypot(q2x, q2y) + (M_PI / 4) * (1 + 2 * a + h);
-  return 1.05 * (dev + 0.5 * speed / n) + 1.0e-3;
-}
-
 // Stage 1's candidates by where a point lies in its stitch cell. Which
 // (row, piece) pairs can come near a vertical line depends on the line's
 // place within one period of the geometry (2 pi in x, a row spacing s in
@@ -153,7 +123,7 @@ double piece_xy_margin(double a, double h, int j) {
 // yarns are the same). The period is cut into kBinsX x kBinsY bins; each
 // bin lists, as bits, the pairs (row offset, piece offset from the cell's
 // first piece) that pass stage 1's box and chord culls and come within the
-// closest-point threshold r + piece_xy_margin of the piece's quadratic
+// closest-point threshold r + quad_margin_xy of the piece's quadratic
 // interpolant, for some point of the bin. The tests are made at the bin's
 // centre with the bin's half-extent (and 0.01 for float rounding) added to
 // every distance, so the list is a superset of the pairs any point in the
@@ -194,6 +164,8 @@ CandidateBins build_candidate_bins(const k::KnitGeom& g) {
   CandidateBins cb;
   const double pi4 = M_PI / 4, s = g.row_spacing, a = g.a, h = g.h;
   const double rr = double(g.r) * 1.001 + 1.0e-4;  // stage 1's box reach
+  // stage 1's chord reach, larger than stage 2's threshold r + quad_margin_xy
+  const double thr = (double(g.r) + g.quad_margin_xy) * 1.001 + 1.0e-4;
   const double bw = 2 * M_PI / CandidateBins::kBinsX, bh = s / CandidateBins::kBinsY;
   const double hx = 0.5 * bw, hy = 0.5 * bh, hd = std::hypot(hx, hy), eps = 0.01;
   // every pair any point of the cell could reach
@@ -205,7 +177,7 @@ CandidateBins build_candidate_bins(const k::KnitGeom& g) {
   if (dg_hi - dg_lo + 1 > 64 || dk_hi - dk_lo + 1 > 16) return cb;
   // per piece place j: box offsets and interpolant (as make_consts, in double)
   struct Place {
-    double oxl, oxh, oyl, oyh, q[6], speed, reach;
+    double oxl, oxh, oyl, oyh, q[6], speed;
   } pl[8];
   for (int j = 0; j < 8; ++j) {
     const k::KBox o = k::knit_piece_offsets_xy(g, j);
@@ -218,12 +190,8 @@ CandidateBins build_candidate_bins(const k::KnitGeom& g) {
     pl[j] = {o.lo.x, o.hi.x, o.lo.y, o.hi.y,
              {nx[0], ny[0], 4 * nx[1] - 3 * nx[0] - nx[2], 4 * ny[1] - 3 * ny[0] - ny[2],
               2 * (nx[0] - 2 * nx[1] + nx[2]), 2 * (ny[0] - 2 * ny[1] + ny[2])},
-             0.0, 0.0};
+             0.0};
     pl[j].speed = std::hypot(pl[j].q[2], pl[j].q[3]) + 2.0 * std::hypot(pl[j].q[4], pl[j].q[5]);
-    // stage 1's chord reach and stage 2's threshold (the larger), as
-    // query_block takes them
-    const double mj = double(g.r) + std::min(double(g.quad_margin), piece_xy_margin(a, h, j));
-    pl[j].reach = mj * 1.001 + 1.0e-4;
   }
   struct Pair {
     int dk, dg;
@@ -245,7 +213,7 @@ CandidateBins build_candidate_bins(const k::KnitGeom& g) {
           if (yc + hy < yk + P.oyl - rr - eps || yc - hy > yk + P.oyh + rr + eps) continue;
           // the interpolant within the threshold (which also bounds the chord test)
           // (a coarse bound first: most pairs in the box are far from it)
-          const double reach = P.reach + hd + eps;
+          const double reach = thr + hd + eps;
           if (quad_distance_lower(xc - t0, yc - yk, P.q, P.speed, 0) > reach) continue;
           if (quad_distance_lower(xc - t0, yc - yk, P.q, P.speed, 32) > reach) continue;
           L.push_back({dk, dg});
