@@ -140,6 +140,34 @@ TEST(Stitch, QuadraticInterpolantErrorWithinBound) {
   }
 }
 
+// Vertical lines cull pieces by the interpolant's distance in x and y, with
+// quad_margin_xy in place of quad_margin: it must bound the x and y error
+// of every piece of knit and purl rows against the double-precision curve
+// (yarn_curve_exact), blended pieces included (x and y do not blend).
+TEST(Stitch, QuadraticInterpolantXYErrorWithinItsBound) {
+  Pattern pat = Pattern::from_rows({{0, 1, 1, 0, 0, 0, 1, 0}, {1, 0, 0, 1, 1, 0, 0, 1}});
+  for (StitchParams sp : {StitchParams{}, StitchParams{1.25f, 3.0f, -0.6f, 0.4f}, StitchParams{1.75f, 5.0f, 1.4f, 0.5f},
+                          StitchParams{0.4f, 2.0f, 0.5f, 0.2f}}) {
+    KnitSurface s = make(pat, sp);
+    ASSERT_EQ(s.geom().has_floats, 0);
+    double worst = 0;
+    for (int row = 0; row < 2; ++row)
+      for (int gp = 0; gp < 64; ++gp) {
+        const k::KQuad q = k::knit_loop_piece_quad_xy(s.geom(), k::knit_row(s.geom(), row).yk, gp);
+        for (int i = 0; i <= 400; ++i) {
+          const double u = i / 400.0;
+          const CurvePoint c = yarn_curve_exact(pat, sp, row, (gp + u) * kPi / 4);
+          const k::kvec3 a = k::knit_quad_eval(q, float(u));
+          worst = std::max(worst, std::hypot(a.x - c.p[0], a.y - c.p[1]));
+        }
+      }
+    std::printf("[ quad ] %s: max x, y error %.4f | quad_margin_xy %.4f (quad_margin %.4f)\n", sp.to_string().c_str(),
+                worst, double(s.geom().quad_margin_xy), double(s.geom().quad_margin));
+    EXPECT_LE(worst, s.geom().quad_margin_xy);
+    EXPECT_GT(worst, 0.5 * s.geom().quad_margin_xy);  // (and not a loose one)
+  }
+}
+
 // Vertical queries through knit and purl rows reject pieces on the x, y
 // interpolant, built without the pattern: it must be the full interpolant's
 // x and y, blended pieces included, for every mix of knit and purl.
