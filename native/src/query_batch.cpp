@@ -116,6 +116,26 @@ struct Work {
 constexpr float kBig = 1.0e30f;
 constexpr int kBlock = 1024;  // points per pass through the stages
 
+// The x and y of the quadratic interpolant of piece place j (0..7) of a
+// knit or purl row, in double: q0 + q1 u + q2 u^2 for u in [0, 1] through
+// the curve's nodes m = 2j, 2j+1, 2j+2 at tau = m pi/8 - pi, relative to
+// the piece's start t0 = tc + (j pi/4 - pi) in x and to the row's centre
+// y_k in y. q = {q0x, q0y, q1x, q1y, q2x, q2y}.
+void piece_interpolant_xy(double a, double h, int j, double q[6]) {
+  double nx[3], ny[3];
+  for (int i = 0; i < 3; ++i) {
+    const double tau = (2 * j + i) * (M_PI / 8) - M_PI;
+    nx[i] = (tau - (j * (M_PI / 4) - M_PI)) + a * std::sin(2 * tau);
+    ny[i] = h * std::cos(tau);
+  }
+  q[0] = nx[0];
+  q[1] = ny[0];
+  q[2] = 4 * nx[1] - 3 * nx[0] - nx[2];
+  q[3] = 4 * ny[1] - 3 * ny[0] - ny[2];
+  q[4] = 2 * (nx[0] - 2 * nx[1] + nx[2]);
+  q[5] = 2 * (ny[0] - 2 * ny[1] + ny[2]);
+}
+
 // Stage 1's candidates by where a point lies in its stitch cell. Which
 // (row, piece) pairs can come near a vertical line depends on the line's
 // place within one period of the geometry (2 pi in x, a row spacing s in
@@ -175,28 +195,26 @@ CandidateBins build_candidate_bins(const k::KnitGeom& g) {
   // 32 bits hold: no bins, and no time spent finding that out (a = 1000
   // took 0.1 s).
   if (dg_hi - dg_lo + 1 > 64 || dk_hi - dk_lo + 1 > 16) return cb;
-  // per piece place j: box offsets and interpolant (as make_consts, in double)
+  // per piece place j: box offsets and interpolant (make_consts's, in double)
   struct Place {
     double oxl, oxh, oyl, oyh, q[6], speed;
   } pl[8];
   for (int j = 0; j < 8; ++j) {
     const k::KBox o = k::knit_piece_offsets_xy(g, j);
-    double nx[3], ny[3];
-    for (int i = 0; i < 3; ++i) {
-      const double tau = (2 * j + i) * (M_PI / 8) - M_PI;
-      nx[i] = (tau - (j * pi4 - M_PI)) + a * std::sin(2 * tau);
-      ny[i] = h * std::cos(tau);
-    }
-    pl[j] = {o.lo.x, o.hi.x, o.lo.y, o.hi.y,
-             {nx[0], ny[0], 4 * nx[1] - 3 * nx[0] - nx[2], 4 * ny[1] - 3 * ny[0] - ny[2],
-              2 * (nx[0] - 2 * nx[1] + nx[2]), 2 * (ny[0] - 2 * ny[1] + ny[2])},
-             0.0};
-    pl[j].speed = std::hypot(pl[j].q[2], pl[j].q[3]) + 2.0 * std::hypot(pl[j].q[4], pl[j].q[5]);
+    Place& P = pl[j];
+    P.oxl = o.lo.x;
+    P.oxh = o.hi.x;
+    P.oyl = o.lo.y;
+    P.oyh = o.hi.y;
+    piece_interpolant_xy(a, h, j, P.q);
+    P.speed = std::hypot(P.q[2], P.q[3]) + 2.0 * std::hypot(P.q[4], P.q[5]);
   }
+  const double reach = thr + hd + eps;  // (the interpolant's, grown by the bin's half-extent)
   struct Pair {
     int dk, dg;
   };
   std::vector<std::vector<Pair>> lists(size_t(CandidateBins::kBinsX * CandidateBins::kBinsY));
+  std::vector<int> first_g(lists.size(), 0);  // each bin's lowest piece offset
   int span_k = 1, span_g = 1;
   for (int iy = 0; iy < CandidateBins::kBinsY; ++iy)
     for (int ix = 0; ix < CandidateBins::kBinsX; ++ix) {
@@ -211,9 +229,9 @@ CandidateBins build_candidate_bins(const k::KnitGeom& g) {
           // the box, grown by the bin's half-extent
           if (xc + hx < t0 + P.oxl - rr - eps || xc - hx > t0 + pi4 + P.oxh + rr + eps) continue;
           if (yc + hy < yk + P.oyl - rr - eps || yc - hy > yk + P.oyh + rr + eps) continue;
-          // the interpolant within the threshold (which also bounds the chord test)
-          // (a coarse bound first: most pairs in the box are far from it)
-          const double reach = thr + hd + eps;
+          // the interpolant within the threshold (which also bounds the
+          // chord test): a coarse bound first, most pairs in the box being
+          // far from it
           if (quad_distance_lower(xc - t0, yc - yk, P.q, P.speed, 0) > reach) continue;
           if (quad_distance_lower(xc - t0, yc - yk, P.q, P.speed, 32) > reach) continue;
           L.push_back({dk, dg});
@@ -227,6 +245,7 @@ CandidateBins build_candidate_bins(const k::KnitGeom& g) {
       }
       span_k = std::max(span_k, khi - klo + 1);
       span_g = std::max(span_g, ghi - glo + 1);
+      first_g[size_t(iy * CandidateBins::kBinsX + ix)] = glo;
     }
   int shift = 0;
   while ((1 << shift) < span_g) ++shift;
@@ -237,9 +256,7 @@ CandidateBins build_candidate_bins(const k::KnitGeom& g) {
   for (size_t b = 0; b < lists.size(); ++b) {
     const auto& L = lists[b];
     if (L.empty()) continue;
-    int glo = L.front().dg;
-    for (const Pair& p : L) glo = std::min(glo, p.dg);
-    const int klo = L.front().dk;
+    const int klo = L.front().dk, glo = first_g[b];
     uint32_t bits = 0;
     for (const Pair& p : L) bits |= 1u << (((p.dk - klo) << shift) + (p.dg - glo));
     cb.bits[b] = int32_t(bits);
