@@ -31,7 +31,7 @@ void check_finite(const char* what, const double* p, ssize_t n) {
 
 // CAPM's segment length, as KnitSurface::march bounds it (kMaxCapmSegment).
 void check_max_segment(double max_segment) {
-  if (!(max_segment > 0) || !(max_segment <= kMaxCapmSegment))
+  if (!capm_segment_in_range(max_segment))
     throw ::py::value_error("max_segment must be > 0 and at most " + num(kMaxCapmSegment) + ", got " +
                             num(max_segment));
 }

@@ -65,7 +65,7 @@ void KnitMaterialParams::validate() const {
     bad("footprint_points", std::to_string(footprint_points), "must be in [1, 64]");
   if (capm_options.max_steps < 1 || capm_options.max_steps > 4096)
     bad("capm_options.max_steps", std::to_string(capm_options.max_steps), "must be in [1, 4096]");
-  if (!(capm_options.max_segment > 0) || !(capm_options.max_segment <= kMaxCapmSegment))
+  if (!capm_segment_in_range(capm_options.max_segment))
     bad("capm_options.max_segment", num(capm_options.max_segment),
         ("must be > 0 and at most " + num(kMaxCapmSegment)).c_str());
   if (!(capm_options.max_bend > 0) || !std::isfinite(capm_options.max_bend))

@@ -130,7 +130,7 @@ k::KnitCapm KnitSurface::march(k::KnitCapm start, Vec3 ray_world, const FramePro
                                const CapmOptions& opt, bool blocked_only, int64_t frame_hint) const {
   static const FlatFrame flat_frame;
   const FrameProvider& fp = frame ? *frame : flat_frame;
-  if (!(opt.max_steps >= 1) || !(opt.max_segment > 0) || !(opt.max_segment <= kMaxCapmSegment) || !(opt.max_bend > 0))
+  if (!(opt.max_steps >= 1) || !capm_segment_in_range(opt.max_segment) || !(opt.max_bend > 0))
     throw std::invalid_argument("CapmOptions: max_steps must be >= 1, max_segment in (0, " +
                                 std::to_string(int(kMaxCapmSegment)) + "] and max_bend > 0");
   int64_t hint = frame_hint;  // the march's lookups stay close together (and near the base hit)

@@ -85,6 +85,8 @@ inline constexpr float kMaxPatternCoord = 32768.0f;
 // segment's length (rows plus pieces along it), so a segment of a million
 // units would take a third of a second per query.
 inline constexpr float kMaxCapmSegment = 1000.0f;
+// Whether a CAPM segment length is in (0, kMaxCapmSegment] (NaN is not).
+inline bool capm_segment_in_range(double max_segment) { return max_segment > 0 && max_segment <= kMaxCapmSegment; }
 
 struct CapmOptions {
   int max_steps = 32;           // hard cap on marched segments
