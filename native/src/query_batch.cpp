@@ -101,14 +101,13 @@ struct Work {
   // top, and the column, normal and tangent there
   std::vector<int32_t> o_slot, o_hit, o_col;
   std::vector<float> o_sin, o_nx, o_ny, o_nz, o_tx, o_ty, o_tz;
-  std::vector<int32_t> pos_of;  // live slot -> index in the o_ arrays
 
   // Room for `need` candidates (and slack for the full-width stores and
   // loads past the end) in every array, keeping what is there.
   void reserve(size_t need) {
     const size_t cap = need + 32;
     if (pt.size() >= cap) return;
-    for (auto* v : {&pt, &row, &piece, &inside, &use, &l_c, &l_cs, &l_k, &l_bits, &o_slot, &o_hit, &o_col, &pos_of, &l_off, &l_csm})
+    for (auto* v : {&pt, &row, &piece, &inside, &use, &l_c, &l_cs, &l_k, &l_bits, &o_slot, &o_hit, &o_col, &l_off, &l_csm})
       v->resize(2 * cap, 0);
     for (auto* v : {&t, &l_t, &l_x, &l_y, &l_yk, &o_sin, &o_nx, &o_ny, &o_nz, &o_tx, &o_ty, &o_tz})
       v->resize(2 * cap, 0.0f);
