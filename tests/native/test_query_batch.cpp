@@ -196,6 +196,59 @@ TEST(QueryBatch, SlipStitchesAndTheScalarChoiceTakeTheKernel) {
   }
 }
 
+// Each entry's cell (stitch code and colour) from its row and column, on
+// a pattern whose every cell has its own colour, so that a cell one column
+// or row off shows: against the pattern itself (the row counted from the
+// bottom, both indices periodic) for every hit of both paths, and the cell
+// against the scalar kernel's. Points on both sides of the origin, where
+// columns and rows are negative and wrap.
+TEST(QueryBatch, EntryCellsAreThePatternsCells) {
+  if (!KnitSurface::batch_simd_available())
+    GTEST_SKIP() << "this CPU has neither AVX-512 nor AVX2 with FMA: no vector path to check";
+  const int rows = 5, cols = 7;
+  std::vector<std::vector<int>> codes(rows, std::vector<int>(cols)), colors = codes;
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) {
+      codes[size_t(r)][size_t(c)] = (r * 3 + c * 5) % 4 < 2 ? 0 : 1;
+      colors[size_t(r)][size_t(c)] = r * cols + c;
+    }
+  const Pattern pat = Pattern::from_rows(codes, colors);
+  const auto wrap = [](int a, int m) { return ((a % m) + m) % m; };
+  std::vector<KnitSurface::BatchPath> paths = {KnitSurface::BatchPath::Simd};
+  if (KnitSurface::batch_best_isa() == KnitSurface::BatchIsa::Avx512) paths.push_back(KnitSurface::BatchPath::Avx2);
+  for (const StitchParams& sp : {StitchParams{}, steep_stitch()}) {
+    const KnitSurface s(pat, sp);
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> U(-200.0f, 200.0f);
+    const int n = 20000;
+    std::vector<float> x(n), y(n);
+    for (int i = 0; i < n; ++i) {
+      x[size_t(i)] = U(rng);
+      y[size_t(i)] = U(rng);
+    }
+    for (const KnitSurface::BatchPath path : paths) {
+      SCOPED_TRACE(KnitSurface::batch_isa_name(s.batch_isa(path)));
+      std::vector<SurfaceHit> b(static_cast<size_t>(n));
+      s.query_batch(x.data(), y.data(), size_t(n), b.data(), path);
+      long hits = 0, negative = 0, wrong = 0, other_cell = 0;
+      for (int i = 0; i < n; ++i) {
+        const SurfaceHit& h = b[size_t(i)];
+        if (!h.hit) continue;
+        ++hits;
+        if (h.row < 0 || h.col < 0) ++negative;
+        const int pr = rows - 1 - wrap(h.row, rows), pc = wrap(h.col, cols);
+        if (h.color != pat.color(pr, pc) || h.stitch != int(pat.stitch(pr, pc))) ++wrong;
+        const SurfaceHit a = s.query(x[size_t(i)], y[size_t(i)]);
+        if (a.hit && (a.row != h.row || a.col != h.col || a.color != h.color)) ++other_cell;
+      }
+      EXPECT_EQ(wrong, 0);
+      EXPECT_LE(other_cell, hits / 10000 + 1);  // (an entry on a cell boundary)
+      EXPECT_GT(negative, hits / 3);
+      EXPECT_GT(hits, n / 4);  // (81% with Crane's stitch, 34% with the thin steep one)
+    }
+  }
+}
+
 // Stage 1 takes each point's candidates from the bin of the stitch cell it
 // falls in, unless a lane of its vector lies beyond 1e4 units: then the
 // whole vector tests every pair of the box, as before the bins. The bins
