@@ -91,10 +91,10 @@ struct Work {
   std::vector<float> t;
   std::vector<int32_t> inside, use;
   // stage 2c -> 3: the crossings to search, in candidate order: candidate,
-  // parameter, point, row centre, span column, row, the depth bits of the
-  // span's three cells (3 bits each), the row's offset in codes[] and the
-  // span column's place in the pattern row
-  std::vector<float> l_t, l_x, l_y, l_yk;
+  // parameter, point, span column, row (its centre follows from it), the
+  // depth bits of the span's three cells (3 bits each), the row's offset in
+  // codes[] and the span column's place in the pattern row
+  std::vector<float> l_t, l_x, l_y;
   std::vector<int32_t> l_c, l_cs, l_k, l_bits, l_off, l_csm;
   // stage 3: entries, in the order the lanes finish them, with their live
   // slot: whether a crossing was found, the entry distance below the shell
@@ -109,7 +109,7 @@ struct Work {
     if (pt.size() >= cap) return;
     for (auto* v : {&pt, &row, &piece, &inside, &use, &l_c, &l_cs, &l_k, &l_bits, &o_slot, &o_hit, &o_col, &l_off, &l_csm})
       v->resize(2 * cap, 0);
-    for (auto* v : {&t, &l_t, &l_x, &l_y, &l_yk, &o_sin, &o_nx, &o_ny, &o_nz, &o_tx, &o_ty, &o_tz})
+    for (auto* v : {&t, &l_t, &l_x, &l_y, &o_sin, &o_nx, &o_ny, &o_nz, &o_tx, &o_ty, &o_tz})
       v->resize(2 * cap, 0.0f);
   }
 };
