@@ -543,8 +543,8 @@ const char* mode_name(KnitMode m) {
 
 KnitMaterial make_material(const Pattern& pattern, const StitchParams& stitch, ::py::object bsdf,
                            ::py::object ply, const std::string& mode, bool capm, bool ply_detail,
-                           int footprint_points, bool footprint_table, bool self_shadowing,
-                           bool near_field_below_cell, double uv_scale,
+                           int footprint_points, bool footprint_table, double table_min_cells,
+                           bool self_shadowing, bool near_field_below_cell, double uv_scale,
                            int max_steps, double max_segment, double max_bend) {
   KnitMaterialParams mp;
   mp.stitch = stitch;
@@ -583,6 +583,7 @@ KnitMaterial make_material(const Pattern& pattern, const StitchParams& stitch, :
   mp.ply_detail = ply_detail;
   mp.footprint_points = footprint_points;
   mp.footprint_table = footprint_table;
+  mp.table_min_cells = float(table_min_cells);
   mp.self_shadowing = self_shadowing;
   mp.near_field_below_cell = near_field_below_cell;
   mp.uv_scale = float(uv_scale);
@@ -1085,8 +1086,9 @@ return the shading point (knit/shading.h).
 
 KnitMaterial(pattern, stitch=StitchParams(), bsdf=None, ply=None,
 mode='near_field', capm=True, ply_detail=True, footprint_points=4,
-footprint_table=True, self_shadowing=True, near_field_below_cell=True,
-uv_scale=40.0, max_steps=32, max_segment=6.2832, max_bend=0.05)
+footprint_table=True, table_min_cells=0.5, self_shadowing=True,
+near_field_below_cell=True, uv_scale=40.0, max_steps=32, max_segment=6.2832,
+max_bend=0.05)
 
 bsdf: a YarnBSDF or a dict of its keyword arguments (None: defaults); it
 needs a colour for every colour index the pattern uses. ply: a PlyProfile or
@@ -1095,7 +1097,9 @@ CAPM ray) or 'multi_scale' (footprint aggregation, p_delta, LEAN-widened
 roughness, mixed colours). footprint_table: multi-scale footprints of a
 stitch cell or more are aggregated from a per-class table built here
 (docs/multiscale.md) instead of CAPM marches (not for patterns with slip
-stitches). self_shadowing: near field, light and bounced rays from a yarn
+stitches). table_min_cells, in [0.5, 1]: the smallest footprint, in
+stitch cells in both directions, the table serves; below a cell it reads
+the table's sub-cell statistics. self_shadowing: near field, light and bounced rays from a yarn
 hit cross the rest of the yarn shell (KnitMaterial.occluded_from,
 shade_from) before they leave it. near_field_below_cell: a multi-scale
 footprint below a stitch cell in either direction is shaded as the near
@@ -1108,7 +1112,8 @@ max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
            ::py::kw_only(), ::py::arg("bsdf") = ::py::none(), ::py::arg("ply") = ::py::none(),
            ::py::arg("mode") = "near_field", ::py::arg("capm") = true,
            ::py::arg("ply_detail") = true, ::py::arg("footprint_points") = 4,
-           ::py::arg("footprint_table") = true, ::py::arg("self_shadowing") = true,
+           ::py::arg("footprint_table") = true, ::py::arg("table_min_cells") = 0.5,
+           ::py::arg("self_shadowing") = true,
            ::py::arg("near_field_below_cell") = true, ::py::arg("uv_scale") = 40.0, ::py::arg("max_steps") = 32,
            ::py::arg("max_segment") = 6.2832, ::py::arg("max_bend") = 0.05)
       .def_property_readonly("pattern",
@@ -1129,6 +1134,8 @@ max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
                              [](const KnitMaterial& km) { return km.params().footprint_points; })
       .def_property_readonly("footprint_table",
                              [](const KnitMaterial& km) { return km.params().footprint_table; })
+      .def_property_readonly("table_min_cells",
+                             [](const KnitMaterial& km) { return km.params().table_min_cells; })
       .def_property_readonly("self_shadowing",
                              [](const KnitMaterial& km) { return km.params().self_shadowing; })
       .def_property_readonly("near_field_below_cell",

@@ -203,10 +203,9 @@ bool KnitModelMaterial::cone_footprint(const SurfaceInteraction& si, Vec3 dir, k
   const float S = hit.pattern_per_world, us = model_->params().uv_scale;
   const float a = S * w / c, b = S * w;  // pattern units
   const float fxx = a * e1x, fxy = a * e1y, fyx = -b * e1y, fyy = b * e1x;
-  // The class table's domain: footprints the kernel stratifies by cell.
-  const knit::k::KFootprint f = knit::k::knit_footprint(model_->surface().geom(), 0, 0, knit::k::kv3(fxx, fxy, 0),
-                                                        knit::k::kv3(fyx, fyy, 0), 1, 0, 0);
-  if (!f.stratified) return false;
+  // The class table's domain: whole cells, or its sub-cells.
+  if (!model_->table_serves(us * hit.u, us * hit.v, knit::k::kv3(fxx, fxy, 0), knit::k::kv3(fyx, fyy, 0)))
+    return false;
   hit.dudx = fxx / us;
   hit.dvdx = fxy / us;
   hit.dudy = fyx / us;

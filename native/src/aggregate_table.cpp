@@ -45,6 +45,15 @@ inline void add_scaled(float* s, const float* m, float w) {
 
 namespace {
 
+// A float's bfloat16: its upper 16 bits, rounded to nearest (ties to even);
+// the statistics are finite.
+uint16_t to_bf16(float v) {
+  uint32_t bits;
+  std::memcpy(&bits, &v, sizeof bits);
+  bits += 0x7fffu + ((bits >> 16) & 1u);
+  return uint16_t(bits >> 16);
+}
+
 // p_delta of `hits` out of `cells` (1 for no cells), kept a probability.
 float pass_fraction(double hits, double cells) {
   return cells > 0 ? std::clamp(float(1 - hits / cells), 0.0f, 1.0f) : 1.0f;
@@ -133,68 +142,44 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
       }
   }
   moments_.assign(size_t(slots) * kThetaBins * kPhiBins * kMoments, 0.0f);
+  constexpr int kSubCells = kSub * kSub;
+  // (built in float, stored as bfloat16 at the end)
+  std::vector<float> sub_f(size_t(slots) * kSubCells * kThetaBins * kPhiBins * kMoments, 0.0f);
+  const auto sub_at = [&](size_t slot, int si, int node) {
+    return &sub_f[((slot * kSubCells + size_t(si)) * kThetaBins * kPhiBins + size_t(node)) * kMoments];
+  };
   const int m_rays = std::max(1, rays_per_direction);
   // The layer counts under the hits: a quarter of the build in scalar
   // counting queries, so batched on CPUs with a vector path (the same
   // counts: tests/native/test_query_batch.cpp).
   const bool batch_layers = layer_counts == LayerCounts::Auto &&
                             surface.batch_isa(KnitSurface::BatchPath::Auto) != KnitSurface::BatchIsa::Scalar;
-  tbb::parallel_for(0, kClasses * kThetaBins, [&](int job) {
-    const int cls = job / kThetaBins, it = job % kThetaBins;
-    if (slot_[size_t(cls)] < 0) return;
-    const std::vector<std::pair<int, int>>& list = cells[size_t(cls)];
-    std::vector<float> hx, hy;  // hit points whose layers are counted in one batch
-    std::vector<SurfaceHit> under;
-    for (int ip = 0; ip < kPhiBins; ++ip) {
-      const Vec3 wi = direction(it, ip);
-      const float side = wi.z < 0 ? -1.0f : 1.0f;
-      double hits = 0, n[3] = {0, 0, 0}, sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0, layers = 0, z = 0;
-      double near[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
-      Vec3 tsum = k::kv3(0, 0, 0);
-      hx.clear();
-      hy.clear();
-      for (int m = 0; m < m_rays; ++m) {
-        // Cells of the class in turn (a stride coprime with most sizes
-        // spreads them), the point inside the cell from a (0,2)-net.
-        const std::pair<int, int>& cell = list[(size_t(m) * 7919u) % list.size()];
-        const Vec3 q = k::knit_sobol2((it * kPhiBins + ip) * m_rays + m);  // other points per direction
-        const float x = (float(cell.second) + k::knit_frac(q.x + 0.5f)) * K_2PI;
-        const float y = (float(cell.first) + k::knit_frac(q.y + 0.5f)) * g.row_spacing;
-        const k::KnitCapm st = k::knit_capm_curved(g, surface.codes(), surface.colors(), x, y, wi, 0, 0,
-                                                   capm.max_segment, capm.max_steps);
-        if (st.state != KNIT_CAPM_HIT) continue;
-        hits += 1;
-        n[0] += st.hit.n.x;
-        n[1] += st.hit.n.y;
-        n[2] += st.hit.n.z;
-        tsum = add_line(tsum, st.hit.tangent);
-        const Vec3 sl = k::knit_ms_slopes(st.hit.n, side);  // as knit_aggregate takes them
-        const float bx = sl.x, by = sl.y;
-        sx += bx;
-        sy += by;
-        sxx += double(bx) * bx;
-        sxy += double(bx) * by;
-        syy += double(by) * by;
-        if (batch_layers) {
-          hx.push_back(st.hit.p.x);
-          hy.push_back(st.hit.p.y);
-        } else {
-          layers += k::knit_vertical_layers(g, surface.codes(), surface.colors(), st.hit.p.x, st.hit.p.y);
-        }
-        z += st.hit.p.z;
-        const int dk = std::clamp(st.hit.row - cell.first, -1, 1), dc = std::clamp(st.hit.col - cell.second, -1, 1);
-        near[(dk + 1) * 3 + dc + 1] += 1;
-      }
-      if (!hx.empty()) {
-        under.resize(hx.size());
-        surface.query_batch(hx.data(), hy.data(), hx.size(), under.data());
-        for (const SurfaceHit& u : under) layers += u.layers;
-      }
-      // The moments are the sums over the rays: hit fraction times the
-      // hit-conditioned mean is the sum over hits divided by all rays.
-      float* mo = &moments_[((size_t(slot_[size_t(cls)]) * kThetaBins + size_t(it)) * kPhiBins + size_t(ip)) *
-                            kMoments];
-      const double inv = 1.0 / m_rays;
+  // The sums over the rays of one direction: of a class's cells, or of one
+  // of their sub-cells.
+  struct Sums {
+    double rays = 0, hits = 0, n[3] = {0, 0, 0}, sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0, layers = 0, z = 0;
+    double near[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+    Vec3 tsum = k::kv3(0, 0, 0);
+    void add(const k::KnitLineHit& h, Vec3 sl, int near_at) {
+      hits += 1;
+      n[0] += h.n.x;
+      n[1] += h.n.y;
+      n[2] += h.n.z;
+      tsum = add_line(tsum, h.tangent);
+      const float bx = sl.x, by = sl.y;
+      sx += bx;
+      sy += by;
+      sxx += double(bx) * bx;
+      sxy += double(bx) * by;
+      syy += double(by) * by;
+      z += h.p.z;
+      near[near_at] += 1;
+    }
+    // The moments are the sums over the rays: hit fraction times the
+    // hit-conditioned mean is the sum over hits divided by all rays.
+    void write(float* mo) const {
+      if (!(rays > 0)) return;
+      const double inv = 1.0 / rays;
       static_assert(kSlope == kNormal + 3 && kSlope2 == kSlope + 2 && kLayers == kSlope2 + 3 && kZ == kLayers + 1 &&
                         kNear == kZ + 1 && kNear + 9 == kLinear && kTangent + 3 < kMoments,
                     "the moments in the order of `sums`");
@@ -209,14 +194,72 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
         mo[kTangent + 2] = t.z;
       }
     }
+  };
+  tbb::parallel_for(0, kClasses * kThetaBins, [&](int job) {
+    const int cls = job / kThetaBins, it = job % kThetaBins;
+    if (slot_[size_t(cls)] < 0) return;
+    const size_t slot = size_t(slot_[size_t(cls)]);
+    const std::vector<std::pair<int, int>>& list = cells[size_t(cls)];
+    std::vector<float> hx, hy;  // hit points whose layers are counted in one batch
+    std::vector<unsigned char> hsub;  // and their sub-cells
+    std::vector<SurfaceHit> under;
+    for (int ip = 0; ip < kPhiBins; ++ip) {
+      const Vec3 wi = direction(it, ip);
+      const float side = wi.z < 0 ? -1.0f : 1.0f;
+      Sums all;
+      std::array<Sums, kSubCells> sub;
+      all.rays = m_rays;
+      hx.clear();
+      hy.clear();
+      hsub.clear();
+      for (int m = 0; m < m_rays; ++m) {
+        // Cells of the class in turn (a stride coprime with most sizes
+        // spreads them), the point inside the cell from a (0,2)-net: each
+        // run of 4^j of its points puts the same number in every sub-cell.
+        const std::pair<int, int>& cell = list[(size_t(m) * 7919u) % list.size()];
+        const Vec3 q = k::knit_sobol2((it * kPhiBins + ip) * m_rays + m);  // other points per direction
+        const float ox = k::knit_frac(q.x + 0.5f), oy = k::knit_frac(q.y + 0.5f);
+        const int si = std::min(int(oy * kSub), kSub - 1) * kSub + std::min(int(ox * kSub), kSub - 1);
+        sub[size_t(si)].rays += 1;
+        const float x = (float(cell.second) + ox) * K_2PI;
+        const float y = (float(cell.first) + oy) * g.row_spacing;
+        const k::KnitCapm st = k::knit_capm_curved(g, surface.codes(), surface.colors(), x, y, wi, 0, 0,
+                                                   capm.max_segment, capm.max_steps);
+        if (st.state != KNIT_CAPM_HIT) continue;
+        const Vec3 sl = k::knit_ms_slopes(st.hit.n, side);  // as knit_aggregate takes them
+        const int dk = std::clamp(st.hit.row - cell.first, -1, 1), dc = std::clamp(st.hit.col - cell.second, -1, 1);
+        all.add(st.hit, sl, (dk + 1) * 3 + dc + 1);
+        sub[size_t(si)].add(st.hit, sl, (dk + 1) * 3 + dc + 1);
+        if (batch_layers) {
+          hx.push_back(st.hit.p.x);
+          hy.push_back(st.hit.p.y);
+          hsub.push_back(static_cast<unsigned char>(si));
+        } else {
+          const int layers = k::knit_vertical_layers(g, surface.codes(), surface.colors(), st.hit.p.x, st.hit.p.y);
+          all.layers += layers;
+          sub[size_t(si)].layers += layers;
+        }
+      }
+      if (!hx.empty()) {
+        under.resize(hx.size());
+        surface.query_batch(hx.data(), hy.data(), hx.size(), under.data());
+        for (size_t i = 0; i < under.size(); ++i) {
+          all.layers += under[i].layers;
+          sub[size_t(hsub[i])].layers += under[i].layers;
+        }
+      }
+      all.write(&moments_[((slot * kThetaBins + size_t(it)) * kPhiBins + size_t(ip)) * kMoments]);
+      for (int si = 0; si < kSubCells; ++si)
+        sub[size_t(si)].write(sub_at(slot, si, it * kPhiBins + ip));
+    }
   });
   // The rows at theta = 0 and pi are one direction each: their columns,
   // marched with different points, are averaged (the moments mix linearly;
   // the tangent is the sign-aligned mean's direction times the mean hit
   // fraction).
-  for (int slot = 0; slot < slots; ++slot)
+  const auto average_poles = [](float* block) {  // the kThetaBins x kPhiBins nodes of one class (or sub-cell)
     for (int it : {0, kThetaBins - 1}) {
-      float* row = &moments_[(size_t(slot) * kThetaBins + size_t(it)) * kPhiBins * kMoments];
+      float* row = block + size_t(it) * kPhiBins * kMoments;
       std::array<float, kMoments> avg{};
       Vec3 tsum = k::kv3(0, 0, 0);
       for (int ip = 0; ip < kPhiBins; ++ip) {
@@ -230,6 +273,23 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
       avg[kTangent + 2] = t.z;
       for (int ip = 0; ip < kPhiBins; ++ip) std::copy(avg.begin(), avg.end(), row + size_t(ip) * kMoments);
     }
+  };
+  const size_t block = size_t(kThetaBins) * kPhiBins * kMoments;
+  for (size_t b = 0; b < size_t(slots); ++b) average_poles(&moments_[b * block]);
+  for (size_t b = 0; b < size_t(slots) * kSubCells; ++b) average_poles(&sub_f[b * block]);
+  sub_moments_.resize(sub_f.size());
+  for (size_t i = 0; i < sub_f.size(); ++i) sub_moments_[i] = to_bf16(sub_f[i]);
+}
+
+std::vector<float> FootprintTable::sub_moments() const {
+  std::vector<float> out(sub_moments_.size());
+  const size_t node = kMoments;
+  for (size_t i = 0; i < out.size() / node; ++i) {
+    const int per_slot = kSub * kSub * kThetaBins * kPhiBins;
+    const int slot = int(i / size_t(per_slot)), rest = int(i % size_t(per_slot));
+    sub_node(slot, rest / (kThetaBins * kPhiBins), rest % (kThetaBins * kPhiBins), &out[i * node]);
+  }
+  return out;
 }
 
 FootprintTable::DirWeights FootprintTable::dir_weights(Vec3 wi) {
@@ -346,6 +406,19 @@ bool FootprintTable::class_counts(const k::KFootprint& f,
   return true;
 }
 
+void FootprintTable::means(k::KnitAggregate& a, const float* sum, Vec3 tsum, float x, float y) {
+  // The hit-weighted means; the slopes' covariance about their mean.
+  const float inv = 1 / sum[kHit];
+  const float sx = sum[kSlope] * inv, sy = sum[kSlope + 1] * inv;
+  a.n = k::kv3_normalize(k::kv3(sum[kNormal], sum[kNormal + 1], sum[kNormal + 2]));
+  a.tangent = k::kv3_normalize(tsum);
+  a.position = k::kv3(x, y, sum[kZ] * inv);
+  a.sxx = std::max(sum[kSlope2] * inv - sx * sx, 0.0f);
+  a.sxy = sum[kSlope2 + 1] * inv - sx * sy;
+  a.syy = std::max(sum[kSlope2 + 2] * inv - sy * sy, 0.0f);
+  a.layers = sum[kLayers] * inv;
+}
+
 k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
   const k::KnitGeom& g = surface.geom();
   k::KnitAggregate a{};
@@ -439,16 +512,7 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
     a.position = k::kv3(f.x, f.y, 0);
     return a;
   }
-  // The hit-weighted means; the slopes' covariance about their mean.
-  const float inv = 1 / sum[kHit];
-  const float sx = sum[kSlope] * inv, sy = sum[kSlope + 1] * inv;
-  a.n = k::kv3_normalize(k::kv3(sum[kNormal], sum[kNormal + 1], sum[kNormal + 2]));
-  a.tangent = k::kv3_normalize(tsum);
-  a.position = k::kv3(f.x, f.y, sum[kZ] * inv);
-  a.sxx = std::max(sum[kSlope2] * inv - sx * sx, 0.0f);
-  a.sxy = sum[kSlope2 + 1] * inv - sx * sy;
-  a.syy = std::max(sum[kSlope2 + 2] * inv - sy * sy, 0.0f);
-  a.layers = sum[kLayers] * inv;
+  means(a, sum.data(), tsum, f.x, f.y);
   if (one_colour_) {
     a.color_w[0] = 1;
     a.color_pick = 0;
@@ -492,6 +556,188 @@ float FootprintTable::p_delta(const KnitSurface& surface, const k::KFootprint& f
   if (!class_counts(f, counts))
     for_each_cell(surface, f, [&](int cls, int, int) { counts[size_t(cls)] += 1; });
   return pass_of(counts, dw);
+}
+
+namespace {
+
+// A box edge in sub-cell units, kept an exact double (x / cw in float
+// loses the sub-cell at the 1e4 units the kernel allows).
+struct SubRange {
+  double lo, hi;  // the box, in sub-cells
+  int64_t first, last;
+};
+
+SubRange sub_range(float centre, float extent, float cell, int sub) {
+  SubRange r;
+  const double c = double(centre) / double(cell), e = double(extent);
+  r.lo = (c - 0.5 * e) * sub;
+  r.hi = (c + 0.5 * e) * sub;
+  r.first = int64_t(std::floor(r.lo));
+  r.last = int64_t(std::ceil(r.hi)) - 1;
+  return r;
+}
+
+int64_t floor_div(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+}  // namespace
+
+bool FootprintTable::sub_box(float x, float y, float ex, float ey, const k::KnitGeom& g) {
+  if (!(ex >= 0.5f && ey >= 0.5f) || !std::isfinite(ex) || !std::isfinite(ey) || !std::isfinite(x) ||
+      !std::isfinite(y) || ex > float(kMaxSubBox) || ey > float(kMaxSubBox))
+    return false;
+  const SubRange rx = sub_range(x, ex, K_2PI, kSub), ry = sub_range(y, ey, g.row_spacing, kSub);
+  return (rx.last - rx.first + 1) * (ry.last - ry.first + 1) <= kMaxSubBox;
+}
+
+template <class Visit>
+void FootprintTable::for_each_sub(const k::KnitGeom& g, float x, float y, float ex, float ey, Visit&& visit) {
+  const SubRange rx = sub_range(x, ex, K_2PI, kSub), ry = sub_range(y, ey, g.row_spacing, kSub);
+  for (int64_t j = ry.first; j <= ry.last; ++j) {
+    const double wy = std::min(ry.hi, double(j + 1)) - std::max(ry.lo, double(j));
+    if (!(wy > 0)) continue;
+    const int64_t kr = floor_div(j, kSub);
+    const int sy = int(j - kr * kSub);
+    for (int64_t i = rx.first; i <= rx.last; ++i) {
+      const double wx = std::min(rx.hi, double(i + 1)) - std::max(rx.lo, double(i));
+      if (!(wx > 0)) continue;
+      const int64_t kc = floor_div(i, kSub);
+      visit(int(kr), int(kc), sy * kSub + int(i - kc * kSub), wx * wy);
+    }
+  }
+}
+
+k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, float x, float y, float ex, float ey,
+                                               Vec3 wi, float pick) const {
+  const k::KnitGeom& g = surface.geom();
+  k::KnitAggregate a{};
+  const DirWeights dw = dir_weights(wi);
+  constexpr int kSubCells = kSub * kSub;
+  // The overlap areas summed per class and sub-cell: one weighted sum of
+  // moments per pair present, however many cells the box touches.
+  std::array<double, kClasses * kSubCells> area{};
+  double total = 0;
+  int touched = 0;
+  for_each_sub(g, x, y, ex, ey, [&](int kr, int kc, int sub, double w) {
+    const int slot = slot_[class_of_[size_t(k::knit_cell_index(g, kr, kc))]];
+    area[size_t(slot * kSubCells + sub)] += w;
+    total += w;
+    ++touched;
+  });
+  std::array<float, kLinear> sum{};
+  Vec3 tsum = k::kv3(0, 0, 0);
+  std::array<float, kClasses * kSubCells> hit_of{};  // hit fraction per pair, for the colours
+  double hits = 0;
+  if (total > 0)
+    for (int ps = 0; ps < slots_ * kSubCells; ++ps) {
+      if (!(area[size_t(ps)] > 0)) continue;
+      const float share = float(area[size_t(ps)] / total);
+      float h = 0;
+      for (int q = 0; q < 4; ++q) {
+        const float w = share * dw.w[size_t(q)];
+        float m[kMoments];
+        sub_node(ps / kSubCells, ps % kSubCells, dw.node[size_t(q)], m);
+        h += dw.w[size_t(q)] * m[kHit];
+        add_scaled<kLinear>(sum.data(), m, w);
+        tsum = add_line(tsum, k::kv3_scale(k::kv3(m[kTangent], m[kTangent + 1], m[kTangent + 2]), w));
+      }
+      hit_of[size_t(ps)] = std::clamp(h, 0.0f, 1.0f);
+      hits += double(share) * double(hit_of[size_t(ps)]);
+    }
+  a.points = touched;
+  a.p_delta = std::clamp(float(1 - hits), 0.0f, 1.0f);
+  const float hit = 1 - a.p_delta;
+  a.hits = hit > 0 ? std::max(1, int(std::lround(hit * float(a.points)))) : 0;
+  a.steps = 0;
+  a.color_pick = -1;
+  if (!(hit > 0 && sum[kHit] > 0)) {
+    a.n = k::kv3(0, 0, 1);
+    a.tangent = k::kv3(1, 0, 0);
+    a.position = k::kv3(x, y, 0);
+    return a;
+  }
+  means(a, sum.data(), tsum, x, y);
+  if (one_colour_) {
+    a.color_w[0] = 1;
+    a.color_pick = 0;
+    return a;
+  }
+  // Colours: each touched sub-cell's hits go to the 3 x 3 block around its
+  // cell by the sub-cell's shares; one of them picked in proportion to its
+  // hits for patterns with more colours than bins.
+  double visit_hits = 0;
+  bool picked = false;
+  const double target = double(k::knit_frac(pick)) * hits * total;
+  for_each_sub(g, x, y, ex, ey, [&](int kr, int kc, int sub, double w) {
+    const int slot = slot_[class_of_[size_t(k::knit_cell_index(g, kr, kc))]];
+    const float h = hit_of[size_t(slot * kSubCells + sub)];
+    if (!(h > 0)) return;
+    float near[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+    for (int q = 0; q < 4; ++q) {
+      float m[kMoments];
+      sub_node(slot, sub, dw.node[size_t(q)], m);
+      for (int i = 0; i < 9; ++i) near[i] += dw.w[size_t(q)] * m[kNear + i];
+    }
+    float nsum = 0;
+    for (float v : near) nsum += v;
+    if (!(nsum > 0)) return;
+    const double wh = w * double(h);
+    visit_hits += wh;
+    int colour = -1;
+    float best = -1;
+    for (int dk = -1; dk <= 1; ++dk)
+      for (int dc = -1; dc <= 1; ++dc) {
+        const float q = near[(dk + 1) * 3 + dc + 1] / nsum;
+        if (q <= 0) continue;
+        const int col = surface.colors()[k::knit_cell_index(g, kr + dk, kc + dc)];
+        a.color_w[std::clamp(col, 0, KNIT_MS_COLORS - 1)] += float(wh * q);
+        if (q > best) {
+          best = q;
+          colour = col;
+        }
+      }
+    if (!picked) {  // the first sub-cell whose running sum reaches the target (else the last)
+      a.color_pick = colour;
+      picked = visit_hits >= target;
+    }
+  });
+  if (visit_hits <= 0) {
+    const int col = surface.colors()[k::knit_cell_index(g, int(std::floor(y / g.row_spacing)),
+                                                        int(std::floor(x / K_2PI)))];
+    std::fill(std::begin(a.color_w), std::end(a.color_w), 0.0f);
+    a.color_w[std::clamp(col, 0, KNIT_MS_COLORS - 1)] = 1;
+    a.color_pick = col;
+    return a;
+  }
+  const double inv_visit = 1 / visit_hits;
+  for (float& w : a.color_w) w = float(w * inv_visit);
+  return a;
+}
+
+float FootprintTable::p_delta_sub(const KnitSurface& surface, float x, float y, float ex, float ey,
+                                  Vec3 wi) const {
+  const k::KnitGeom& g = surface.geom();
+  const DirWeights dw = dir_weights(wi);
+  constexpr int kSubCells = kSub * kSub;
+  std::array<double, kClasses * kSubCells> area{};
+  double total = 0;
+  for_each_sub(g, x, y, ex, ey, [&](int kr, int kc, int sub, double w) {
+    area[size_t(slot_[class_of_[size_t(k::knit_cell_index(g, kr, kc))]] * kSubCells + sub)] += w;
+    total += w;
+  });
+  if (!(total > 0)) return 1;
+  double hits = 0;
+  for (int ps = 0; ps < slots_ * kSubCells; ++ps) {
+    if (!(area[size_t(ps)] > 0)) continue;
+    const float share = float(area[size_t(ps)] / total);
+    float h = 0;
+    for (int q = 0; q < 4; ++q) {
+      float m[kMoments];
+      sub_node(ps / kSubCells, ps % kSubCells, dw.node[size_t(q)], m);
+      h += dw.w[size_t(q)] * m[kHit];
+    }
+    hits += double(share) * double(std::clamp(h, 0.0f, 1.0f));
+  }
+  return std::clamp(float(1 - hits), 0.0f, 1.0f);
 }
 
 }  // namespace knit

@@ -61,6 +61,8 @@ void KnitMaterialParams::validate() const {
   };
   if (!std::isfinite(uv_scale) || !(uv_scale > 0) || uv_scale > 1e6f)
     bad("uv_scale", num(uv_scale), "must be finite, > 0 and at most 1e6");
+  if (!(table_min_cells >= 0.5f && table_min_cells <= 1.0f))
+    bad("table_min_cells", num(table_min_cells), "must be in [0.5, 1]");
   if (footprint_points < 1 || footprint_points > KNIT_MS_MAX_POINTS)
     bad("footprint_points", std::to_string(footprint_points), "must be in [1, 64]");
   if (capm_options.max_steps < 1 || capm_options.max_steps > 4096)
@@ -220,14 +222,36 @@ bool KnitMaterial::stratified(const BaseHit& hit) const {
   return k::knit_footprint_stratified(surface_.geom(), fx, fy) != 0;
 }
 
+bool KnitMaterial::sub_cell(float x, float y, Vec3 fx, Vec3 fy) const {
+  if (!table_ || params_.table_min_cells >= 1.0f) return false;
+  const Vec3 e = k::knit_footprint_extent(surface_.geom(), fx, fy);
+  if (e.x >= 1.0f && e.y >= 1.0f) return false;  // whole cells
+  return e.x >= params_.table_min_cells && e.y >= params_.table_min_cells &&
+         FootprintTable::sub_box(x, y, e.x, e.y, surface_.geom());
+}
+
+bool KnitMaterial::sub_cell(const BaseHit& hit) const {
+  if (!table_ || params_.table_min_cells >= 1.0f) return false;
+  Vec3 fx, fy;
+  footprint_axes(hit, fx, fy);
+  return sub_cell(params_.uv_scale * hit.u, params_.uv_scale * hit.v, fx, fy);
+}
+
+bool KnitMaterial::table_serves(float x, float y, Vec3 fx, Vec3 fy) const {
+  if (!table_) return false;
+  return k::knit_footprint_stratified(surface_.geom(), fx, fy) != 0 || sub_cell(x, y, fx, fy);
+}
+
 bool KnitMaterial::near_field_at(const BaseHit& hit) const {
   if (params_.mode != KnitMode::MultiScale) return true;
-  return params_.near_field_below_cell && !stratified(hit);
+  return params_.near_field_below_cell && !stratified(hit) && !sub_cell(hit);
 }
 
 bool KnitMaterial::uses_shift(const BaseHit& hit) const {
   if (params_.mode != KnitMode::MultiScale) return false;  // one ray, no footprint points
   const bool by_cell = stratified(hit);
+  // The sub-cells read the shift only to pick one colour of many.
+  if (!by_cell && sub_cell(hit)) return params_.bsdf.num_colors() > KNIT_MS_COLORS;
   if (!by_cell && params_.near_field_below_cell) return false;  // the near field, as above
   // From the class table (the same test as shade's) with no points: only a
   // marched footprint reads the shift.
@@ -249,9 +273,14 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     Vec3 fx, fy;
     footprint_axes(hit, fx, fy);
     const int points = footprint_points_for(fx, fy);
+    const bool half_cells = sub_cell(x, y, fx, fy);
     const k::KFootprint f = k::knit_footprint(surface_.geom(), x, y, fx, fy, points, shift[0], shift[1]);
     k::KnitAggregate a;
-    if (table_ && f.stratified) {
+    if (half_cells) {
+      const Vec3 e = k::knit_footprint_extent(surface_.geom(), fx, fy);
+      a = table_->aggregate_sub(surface_, x, y, e.x, e.y, wi, shift[0]);  // flat-base, as below
+      sh.from_table = true;
+    } else if (table_ && f.stratified) {
       a = table_->aggregate(surface_, f, wi);  // flat-base statistics: no curvature needed
       sh.from_table = true;
     } else {
@@ -407,6 +436,10 @@ float KnitMaterial::transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameP
     const Vec3 wi = k::kv3_neg(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n));
     Vec3 fx, fy;
     footprint_axes(hit, fx, fy);
+    if (sub_cell(x, y, fx, fy)) {
+      const Vec3 e = k::knit_footprint_extent(surface_.geom(), fx, fy);
+      return table_->p_delta_sub(surface_, x, y, e.x, e.y, wi);
+    }
     const k::KFootprint f =
         k::knit_footprint(surface_.geom(), x, y, fx, fy, footprint_points_for(fx, fy), shift[0], shift[1]);
     if (table_ && f.stratified) return table_->p_delta(surface_, f, wi);

@@ -332,6 +332,52 @@ TEST(FootprintTable, ColourHistogramFollowsTheCells) {
   std::printf("[ table ] two colours: worst colour-weight difference %.3f, layers %.3f\n", worst_c, worst_l);
 }
 
+// The same below a cell: the sub-cells' histogram and layer count over a
+// box of half a cell to a cell against the marched aggregate over the same
+// box (points over the footprint itself, not over whole cells).
+TEST(FootprintTable, SubCellColoursFollowTheCells) {
+  KnitSurface s(example("diamond_blocks_2colour"), StitchParams{});
+  const FootprintTable table(s, CapmOptions{});
+  const float cw = 6.2831853f, ch = s.geom().row_spacing;
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<float> U(0, 1);
+  double worst_c = 0, worst_l = 0, mean_c = 0;
+  int mixed = 0;
+  const int reps = 48;
+  for (int rep = 0; rep < reps; ++rep) {
+    const float size = (0.5f + 0.45f * U(rng)) * std::min(cw, ch);
+    const float x = 300 * U(rng), y = 216 * U(rng);
+    const float th = 1.2f * U(rng), ph = 6.2831853f * U(rng);
+    const k::kvec3 wi = k::kv3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
+    const float ex = size / cw, ey = size / ch;
+    if (!FootprintTable::sub_box(x, y, ex, ey, s.geom())) continue;
+    const k::KnitAggregate t = table.aggregate_sub(s, x, y, ex, ey, wi);
+    double c1 = 0, layers = 0, hits = 0;
+    for (int i = 0; i < 16; ++i) {
+      const k::KnitAggregate m = k::knit_aggregate(s.geom(), s.codes(), s.colors(), x, y, k::kv3(size, 0, 0),
+                                                   k::kv3(0, size, 0), wi, 64, U(rng), U(rng), 0, 0, 6.2832f, 32);
+      c1 += m.color_w[1] * m.hits;
+      layers += m.layers * m.hits;
+      hits += m.hits;
+    }
+    if (!(hits > 0) || t.hits == 0) continue;
+    c1 /= hits;
+    layers /= hits;
+    if (c1 > 0.05 && c1 < 0.95) ++mixed;
+    worst_c = std::max(worst_c, std::abs(t.color_w[1] - c1));
+    worst_l = std::max(worst_l, std::abs(t.layers - layers));
+    mean_c += std::abs(t.color_w[1] - c1) / reps;
+    EXPECT_NEAR(t.color_w[0] + t.color_w[1], 1.0, 1e-4);
+    EXPECT_NEAR(t.color_w[1], c1, 0.1) << "footprint " << rep;
+    EXPECT_NEAR(t.layers, layers, 0.2) << "footprint " << rep;
+  }
+  std::printf("[ sub-cells ] two colours: colour-weight difference mean %.3f worst %.3f, layers worst %.3f; "
+              "%d footprints of both colours\n",
+              mean_c, worst_c, worst_l, mixed);
+  EXPECT_LT(mean_c, 0.02);
+  EXPECT_GT(mixed, 3) << "too few footprints on a colour boundary to test the mix";
+}
+
 // The material uses the table for footprints of a cell or more and marches
 // smaller ones; footprint_table = false always marches, and so do patterns
 // with slip stitches.
@@ -479,6 +525,7 @@ TEST(FootprintTable, FootprintsBelowACellAreTheNearFieldOrMarchPointsInProportio
   mp.mode = KnitMode::MultiScale;
   mp.footprint_points = 16;
   mp.near_field_below_cell = false;  // (by default such footprints are the near field, below)
+  mp.table_min_cells = 1;  // whole cells only: the sub-cells have a test of their own
   KnitMaterial m(seed(), mp);
   mp.near_field_below_cell = true;
   KnitMaterial nf_below(seed(), mp);
@@ -518,6 +565,178 @@ TEST(FootprintTable, FootprintsBelowACellAreTheNearFieldOrMarchPointsInProportio
   EXPECT_FALSE(t.aggregated);
   hit.dvdy = 0.8f * m.surface().geom().row_spacing / mp.uv_scale;  // below a cell in one direction
   EXPECT_TRUE(nf_below.near_field_at(hit));
+}
+
+// The sub-cells (a quarter of a cell on a side): a box of half a cell or
+// more is the area-weighted sum of the sub-cells it overlaps. Against explicit tubes over the same boxes
+// (double-precision ray casts on a 16 x 16 grid per box), from in front and
+// behind, the fraction of rays passing through and the mean normal; and
+// the sub-cells must be closer to the tubes than the whole cell they lie
+// in, which is all a table of whole cells can give a box below a cell.
+TEST(FootprintTable, SubCellsMatchExplicitTubes) {
+  double sum_sub = 0, sum_cell = 0, worst_sub = 0, sum_n = 0, sum_n_cell = 0;
+  int boxes = 0, normals = 0;
+  std::mt19937 rng(2026);
+  std::uniform_real_distribution<double> U(0, 1);
+  for (const NamedPattern& np : groundtruth_patterns()) {
+    GroundTruthScene sc(np.pattern, StitchParams{}, 0, 45);
+    const FootprintTable table(sc.surface, CapmOptions{});
+    const double cw = 6.283185307179586, ch = sc.surface.geom().row_spacing;
+    double pat_sub = 0, pat_cell = 0;
+    int pat_boxes = 0;
+    for (double th_deg : {0.0, 30.0, 55.0, 125.0}) {
+      const double th = th_deg * kPiD / 180;
+      const D3 wi = {std::sin(th) * 0.6, std::sin(th) * 0.8, std::cos(th)};
+      const k::kvec3 wif = k::kv3(float(wi[0]), float(wi[1]), float(wi[2]));
+      for (int b = 0; b < 40; ++b) {
+        const double ex = 0.5 + 0.2 * U(rng), ey = 0.5 + 0.2 * U(rng);
+        const double bw = ex * cw, bh = ey * ch;
+        const double x0 = sc.x0 + (sc.x1 - sc.x0 - bw) * U(rng), y0 = sc.y0 + (sc.y1 - sc.y0 - bh) * U(rng);
+        const float cx = float(x0 + 0.5 * bw), cy = float(y0 + 0.5 * bh);
+        ASSERT_TRUE(FootprintTable::sub_box(cx, cy, float(ex), float(ey), sc.surface.geom()));
+        const k::KnitAggregate a = table.aggregate_sub(sc.surface, cx, cy, float(ex), float(ey), wif);
+        EXPECT_FLOAT_EQ(table.p_delta_sub(sc.surface, cx, cy, float(ex), float(ey), wif), a.p_delta);
+        // The whole cell under the box's centre, from the whole-cell table.
+        const k::KFootprint fc = k::knit_footprint(sc.surface.geom(), cx, cy, k::kv3(float(cw), 0, 0),
+                                                   k::kv3(0, float(ch), 0), 4, 0.5f, 0.5f);
+        ASSERT_EQ(fc.ncx * fc.ncy, 1);
+        const k::KnitAggregate ac = table.aggregate(sc.surface, fc, wif);
+        const float pd_cell = ac.p_delta;
+        const int G = 32;
+        int through = 0;
+        D3 nsum = {0, 0, 0};
+        for (int i = 0; i < G; ++i)
+          for (int j = 0; j < G; ++j) {
+            D3 o, d;
+            sc.entry_ray(x0 + bw * (i + 0.5) / G, y0 + bh * (j + 0.5) / G, wi, o, d);
+            double tmax = sc.shell_exit(o, d);
+            if (d[2] > 0) {  // from behind, as in MatchesExplicitTubesOverFootprint
+              tmax = 2 * sc.surface.shell_top() / d[2];
+              o = add(o, mul(d, -tmax));
+            }
+            const TubeHit h = sc.tubes.intersect(o, d, 0, tmax);
+            if (!h.hit) {
+              ++through;
+              continue;
+            }
+            for (int c = 0; c < 3; ++c) nsum[c] += h.normal[c];
+          }
+        const double pd = double(through) / (G * G);
+        const double e_sub = std::fabs(a.p_delta - pd), e_cell = std::fabs(pd_cell - pd);
+        sum_sub += e_sub;
+        sum_cell += e_cell;
+        pat_sub += e_sub;
+        pat_cell += e_cell;
+        worst_sub = std::max(worst_sub, e_sub);
+        ++boxes;
+        ++pat_boxes;
+        if (through < G * G / 2 && a.hits > 0) {  // a mean normal of half the rays or more
+          const double nerr = angle_between({a.n.x, a.n.y, a.n.z}, nsum);
+          sum_n += nerr;
+          sum_n_cell += angle_between({ac.n.x, ac.n.y, ac.n.z}, nsum);
+          ++normals;
+          EXPECT_LT(nerr, 25.0) << np.name << " " << th_deg << " box " << b;
+        }
+      }
+    }
+    std::printf("[ sub-cells ] %-20s mean |p_delta - explicit|: sub-cells %.4f, whole cell %.4f (%d boxes)\n",
+                np.name.c_str(), pat_sub / pat_boxes, pat_cell / pat_boxes, pat_boxes);
+  }
+  const double m_sub = sum_sub / boxes, m_cell = sum_cell / boxes;
+  std::printf("[ sub-cells ] all: mean |p_delta - explicit| sub-cells %.4f, whole cell %.4f, worst %.4f; "
+              "mean normal %.2f deg (whole cell %.2f) over %d boxes\n",
+              m_sub, m_cell, worst_sub, sum_n / std::max(normals, 1), sum_n_cell / std::max(normals, 1), normals);
+  EXPECT_LT(m_sub, 0.03);
+  EXPECT_LT(m_sub, 0.7 * m_cell) << "the sub-cells must resolve what the whole cell cannot";
+  EXPECT_LT(sum_n / std::max(normals, 1), 6.0);
+  EXPECT_LT(sum_n, 0.7 * sum_n_cell);
+}
+
+// The sub-cells come from the rays of the whole cells, split by where they
+// start: a (0,2)-net puts a sixteenth of them in each, so each linear
+// statistic of a node is the mean of its sixteen sub-cells' (to their
+// bfloat16 rounding); and they must differ from it, or they would resolve
+// nothing.
+TEST(FootprintTable, WholeCellsAreTheMeanOfTheirSubCells) {
+  KnitSurface s(seed(), StitchParams{});
+  const FootprintTable t(s, CapmOptions{}, 64);
+  constexpr int kStats = 24, kLinearStats = 20, kNodes = FootprintTable::kThetaBins * FootprintTable::kPhiBins;
+  constexpr int kSubs = FootprintTable::kSub * FootprintTable::kSub;
+  const std::vector<float>&whole = t.node_moments(), &sub = t.sub_moments();
+  ASSERT_EQ(sub.size(), whole.size() * kSubs);
+  double worst = 0, spread = 0;
+  for (int slot = 0; slot < t.classes_present(); ++slot)
+    for (int node = 0; node < kNodes; ++node)
+      for (int q = 0; q < kLinearStats; ++q) {
+        const float w = whole[(size_t(slot) * kNodes + size_t(node)) * kStats + size_t(q)];
+        double mean = 0, big = 1;
+        for (int si = 0; si < kSubs; ++si) {
+          const float v = sub[((size_t(slot) * kSubs + size_t(si)) * kNodes + size_t(node)) * kStats + size_t(q)];
+          mean += v / kSubs;
+          big = std::max(big, double(std::fabs(v)));
+          if (q == 0) spread = std::max(spread, double(std::fabs(v - w)));
+        }
+        worst = std::max(worst, std::fabs(mean - w) / big);
+      }
+  std::printf("sub-cells: worst relative gap to their whole cell's mean %.2g; widest hit-fraction spread %.3f\n",
+              worst, spread);
+  EXPECT_LT(worst, 1.0 / 512 + 1e-6);  // bfloat16's rounding, 2^-9 of the largest value
+  EXPECT_GT(worst, 0.0) << "stored in float: the bound above is loose";
+  EXPECT_GT(spread, 0.2);
+}
+
+// Which footprints the material reads from the sub-cells: at least
+// table_min_cells in both directions and below a cell in one, within
+// kMaxSubBox sub-cells; others keep their paths. Out-of-range
+// table_min_cells is rejected naming the field.
+TEST(FootprintTable, MaterialReadsSubCellsFromTableMinCells) {
+  KnitMaterialParams mp;
+  mp.mode = KnitMode::MultiScale;
+  EXPECT_EQ(mp.table_min_cells, 0.5f);
+  KnitMaterial half(seed(), mp);
+  mp.table_min_cells = 1;
+  KnitMaterial whole(seed(), mp);
+  const float cw = 6.2831853f, ch = half.surface().geom().row_spacing;
+  BaseHit hit;
+  hit.u = 0.37f;
+  hit.v = 0.21f;
+  const Vec3 dir = k::kv3_normalize(k::kv3(0.3f, 0.1f, -1));
+  auto size = [&](float ex, float ey) {
+    hit.dudx = ex * cw / mp.uv_scale;
+    hit.dvdy = ey * ch / mp.uv_scale;
+  };
+  size(0.6f, 0.8f);
+  EXPECT_FALSE(half.near_field_at(hit));
+  EXPECT_TRUE(whole.near_field_at(hit));
+  EXPECT_FALSE(half.uses_shift(hit));  // one colour: no points, no pick
+  const KnitShade t = half.shade(hit, dir, nullptr);
+  EXPECT_TRUE(t.from_table);
+  EXPECT_FALSE(t.aggregated);
+  EXPECT_FALSE(t.in_shell);
+  const Vec3 wi = k::kv3_neg(dir);
+  const float x = mp.uv_scale * hit.u, y = mp.uv_scale * hit.v;
+  const float pd = half.footprint_table()->p_delta_sub(half.surface(), x, y, 0.6f, 0.8f, wi);
+  EXPECT_FLOAT_EQ(half.transmittance(hit, dir, nullptr), pd);
+  EXPECT_FLOAT_EQ(t.pass_through ? 1.0f : t.point.p_delta, pd);
+  size(0.45f, 0.8f);  // below half a cell in one direction: the near field
+  EXPECT_TRUE(half.near_field_at(hit));
+  size(0.6f, 40.0f);  // 3 x 81 sub-cells: more than kMaxSubBox
+  EXPECT_TRUE(half.near_field_at(hit));
+  size(1.5f, 2.5f);  // whole cells: the same path either way
+  EXPECT_FALSE(half.near_field_at(hit));
+  const KnitShade a = half.shade(hit, dir, nullptr), b = whole.shade(hit, dir, nullptr);
+  EXPECT_TRUE(a.from_table);
+  EXPECT_EQ(a.point.p_delta, b.point.p_delta);
+  EXPECT_EQ(a.sn.z, b.sn.z);
+  for (float bad : {0.49f, 1.01f, std::nanf("")}) {
+    mp.table_min_cells = bad;
+    try {
+      KnitMaterial m(seed(), mp);
+      ADD_FAILURE() << "table_min_cells " << bad << " accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("table_min_cells"), std::string::npos) << e.what();
+    }
+  }
 }
 
 // The build counts the layers under its hits with one batched query per

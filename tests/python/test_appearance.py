@@ -725,11 +725,15 @@ class KnitMaterialMultiScale(unittest.TestCase):
     def setUp(self):
         self.stitch = knitshade.StitchParams()
         self.surf = knitshade.KnitSurface(seed_pattern(), self.stitch)
-        self.m = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0)
+        # The class table for whole cells only (table_min_cells=1): below a
+        # cell, the near field (test_sub_cells_come_from_the_table has the
+        # default's sub-cells).
+        self.m = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0,
+                                        table_min_cells=1.0)
         # The marched aggregate also below a stitch cell (by default those
         # footprints are shaded as the near field).
         self.agg = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0,
-                                          near_field_below_cell=False)
+                                          near_field_below_cell=False, table_min_cells=1.0)
         self.rng = np.random.default_rng(21)
 
     def test_footprints_below_a_cell_are_the_near_field(self):
@@ -754,6 +758,30 @@ class KnitMaterialMultiScale(unittest.TestCase):
                 self.assertFalse(np.array_equal(ag["sn"], nf["sn"], equal_nan=True))
         big = self.m.shade(u, v, d, footprint=[7.0, 0.0, 0.0, 5.0], shift=[0.3, 0.7])
         self.assertTrue(np.all(big["steps"] == 0), "a cell or more in both directions: the class table")
+
+    def test_sub_cells_come_from_the_table(self):
+        # By default (table_min_cells=0.5) a footprint of half a cell to a
+        # cell comes from the class table's sub-cells: no march, and not
+        # the near field; below half a cell, the near field.
+        m = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0)
+        self.assertAlmostEqual(m.table_min_cells, 0.5)
+        near = knitshade.KnitMaterial(seed_pattern(), self.stitch, uv_scale=1.0)
+        n = 300
+        u, v = self.rng.uniform(0, 40, n), self.rng.uniform(0, 40, n)
+        d = -random_view(self.rng, n, 1.2)
+        nf = near.shade(u, v, d)
+        sub = m.shade(u, v, d, footprint=[5.0, 0.0, 0.0, 4.0])  # 0.80 x 0.89 cells
+        self.assertTrue(np.all(sub["steps"] == 0))
+        self.assertFalse(np.array_equal(sub["sn"], nf["sn"], equal_nan=True))
+        pd = m.transmittance(u, v, d, footprint=[5.0, 0.0, 0.0, 4.0])
+        self.assertTrue(np.all((pd >= 0) & (pd <= 1)))
+        self.assertGreater(np.ptp(pd), 0.05)  # the sub-cells differ from place to place
+        small = m.shade(u, v, d, footprint=[2.0, 0.0, 0.0, 1.5])  # 0.32 x 0.33 cells: the near field
+        for key in nf:
+            np.testing.assert_array_equal(small[key], nf[key], err_msg=key)
+        for bad in (0.3, 1.5, float("nan")):
+            with self.assertRaisesRegex(ValueError, "table_min_cells"):
+                knitshade.KnitMaterial(seed_pattern(), mode="multi_scale", table_min_cells=bad)
 
     def test_p_delta_is_a_probability_and_equals_transmittance(self):
         n = 300

@@ -200,6 +200,10 @@ TEST(SceneParse, KnitParameterRanges) {
             std::string::npos);
   EXPECT_NE(knit_error("footprint_points", 0).find("materials.wool.footprint_points: must be in [1, 64], got 0"),
             std::string::npos);
+  EXPECT_NE(knit_error("table_min_cells", 0.25).find("materials.wool.table_min_cells: must be in [0.5, 1], got 0.25"),
+            std::string::npos)
+      << knit_error("table_min_cells", 0.25);
+  EXPECT_NE(knit_error("table_min_cells", "half").find("materials.wool.table_min_cells"), std::string::npos);
   EXPECT_NE(knit_error("bsdf", {{"roughness_x", 0}}).find("materials.wool.bsdf.roughness_x: must be in (0, 1], got 0"),
             std::string::npos);
   EXPECT_NE(knit_error("bsdf", {{"eta", 0.5}}).find("materials.wool.bsdf.eta: must be in [1, 3], got 0.5"),
@@ -233,7 +237,7 @@ TEST(SceneParse, KnitMaterialMapsOntoTheModel) {
                "eta": 1.4, "body_energy": 0.9, "body_reflect": 0.3, "optical_depth": 2},
       "ply": {"ply_count": 2, "ply_twist": 45, "fiber_count": 20, "fiber_twist": -10},
       "mode": "multi_scale", "capm": false, "footprint_points": 8, "frames": "curvature", "explicit_samples": 12,
-      "footprint_table": false, "self_shadowing": false, "near_field_below_cell": false})");
+      "footprint_table": false, "table_min_cells": 0.75, "self_shadowing": false, "near_field_below_cell": false})");
   const SceneDesc d = parse(j);
   const KnitDesc& k = d.materials[1].knit;
   ASSERT_TRUE(k.model);
@@ -263,6 +267,7 @@ TEST(SceneParse, KnitMaterialMapsOntoTheModel) {
   EXPECT_FALSE(p.capm);
   EXPECT_EQ(p.footprint_points, 8);
   EXPECT_FALSE(p.footprint_table);
+  EXPECT_FLOAT_EQ(p.table_min_cells, 0.75f);
   EXPECT_FALSE(p.self_shadowing);
   EXPECT_FALSE(p.near_field_below_cell);
   EXPECT_EQ(k.frames, KnitFrames::Curvature);

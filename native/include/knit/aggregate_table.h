@@ -33,6 +33,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "knit/surface.h"
@@ -87,6 +88,27 @@ class FootprintTable {
   // Only its p_delta (shadow rays).
   float p_delta(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi_local) const;
 
+  // Footprints of half a cell or more (docs/multiscale.md, "Footprints
+  // below a cell: sub-cells"): the table also keeps each class's statistics
+  // per sub-cell, a quarter of the cell on a side (kSub x kSub of them,
+  // from the same rays, stored as bfloat16), and a
+  // box of ex x ey cells centred on pattern point (x, y) is the sum over
+  // the sub-cells it overlaps, each weighted by the area of the overlap.
+  // Its domain: at least half a cell in both directions and at most
+  // kMaxSubBox sub-cells touched (sub_box). Bigger boxes take aggregate()'s
+  // whole cells. `pick` in [0, 1) picks the colour of one hit sub-cell for
+  // patterns with more colours than the histogram has bins.
+  static constexpr int kSub = 4;
+  static constexpr int kMaxSubBox = 64;
+  static bool sub_box(float x, float y, float ex, float ey, const k::KnitGeom& g);
+  k::KnitAggregate aggregate_sub(const KnitSurface& surface, float x, float y, float ex, float ey, Vec3 wi_local,
+                                 float pick = 0.5f) const;
+  float p_delta_sub(const KnitSurface& surface, float x, float y, float ex, float ey, Vec3 wi_local) const;
+  // The per-sub-cell statistics (kMoments floats per class present,
+  // sub-cell and direction node, as stored: rounded to bfloat16), for tests.
+  std::vector<float> sub_moments() const;
+  bool one_colour() const { return one_colour_; }
+
   // Class (0..9) of cell (row k from the bottom, column c) of the surface.
   static int cell_class(const KnitSurface& surface, int k, int c);
   // How many cells of each class f's box holds, as the aggregate counts
@@ -104,7 +126,8 @@ class FootprintTable {
   int period_cols() const { return period_cols_; }
 
   size_t bytes() const {
-    return sizeof(*this) + moments_.size() * sizeof(float) + class_of_.size() + prefix_.size() * sizeof(uint16_t);
+    return sizeof(*this) + moments_.size() * sizeof(float) + sub_moments_.size() * sizeof(uint16_t) +
+           class_of_.size() + prefix_.size() * sizeof(uint16_t);
   }
   int classes_present() const { return slots_; }
 
@@ -135,6 +158,24 @@ class FootprintTable {
   const float* moments(int slot, int node) const {
     return &moments_[(size_t(slot) * kThetaBins * kPhiBins + size_t(node)) * kMoments];
   }
+  // Node `node` of sub-cell `sub` of class slot `slot`, unpacked into m
+  // (kMoments floats).
+  void sub_node(int slot, int sub, int node, float* m) const {
+    const uint16_t* p =
+        &sub_moments_[((size_t(slot) * kSub * kSub + size_t(sub)) * kThetaBins * kPhiBins + size_t(node)) * kMoments];
+    for (int i = 0; i < kMoments; ++i) {
+      const uint32_t bits = uint32_t(p[i]) << 16;
+      std::memcpy(&m[i], &bits, sizeof bits);
+    }
+  }
+  // The sub-cells a box touches and their overlap areas: calls
+  // visit(row k, column c, sub-cell index, area) for each.
+  template <class Visit>
+  static void for_each_sub(const k::KnitGeom& g, float x, float y, float ex, float ey, Visit&& visit);
+  // The hit-weighted means of summed moments `sum` (kLinear floats) and
+  // tangent sum `tsum` into a: normal, tangent, height, slope covariance,
+  // layers.
+  static void means(k::KnitAggregate& a, const float* sum, Vec3 tsum, float x, float y);
   float hit_fraction(int cls, const DirWeights& d) const;  // bilinear in direction
   float slot_hit_fraction(int slot, const DirWeights& d) const;  // the same by slot
   // The shares of a class's hits on the 3 x 3 block around the cell, in direction d.
@@ -161,6 +202,11 @@ class FootprintTable {
   std::array<int, kClasses> slot_{};  // index into moments_ blocks, -1 when the class is absent
   int slots_ = 0;                     // classes present
   std::vector<float> moments_;       // [slot][theta][phi][kMoments]
+  // [slot][sub-cell][theta][phi][kMoments], sub-cell = sy * kSub + sx, as
+  // bfloat16 (a float's upper half, rounded to nearest: 8 significant bits,
+  // 0.4% at most, where the statistics' own sampling error is several
+  // percent; half the memory of float16's range checks for a shift).
+  std::vector<uint16_t> sub_moments_;
   std::vector<unsigned char> class_of_;  // class of each pattern cell, by knit_cell_index
   bool one_colour_ = true;               // every cell has colour index 0
   int single_class_ = -1;                // the class of every cell, when the pattern has one

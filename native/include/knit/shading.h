@@ -34,6 +34,11 @@ struct KnitMaterialParams {
   bool capm = true;             // false: no parallax, the height query at the hit's (u, v)
   int footprint_points = 4;     // multi-scale Sobol' points per cell-sized footprint (docs/multiscale.md)
   bool footprint_table = true;  // multi-scale footprints of a cell or more: the class table, not marches
+  // Multi-scale with the class table: the smallest footprint, in stitch
+  // cells in both directions, that the table serves, in [0.5, 1]. Below 1,
+  // footprints of table_min_cells up to a cell come from its sub-cell
+  // statistics (docs/multiscale.md, "Footprints below a cell: sub-cells").
+  float table_min_cells = 0.5f;
   bool self_shadowing = true;   // near field: light and bounces from a yarn hit cross the rest of the shell
   // Multi-scale: a footprint below a stitch cell (in either direction) is
   // shaded as the near field at the hit (the pixel's samples cover the
@@ -99,8 +104,8 @@ class KnitMaterial {
   // otherwise (the results are the same for any shift).
   bool uses_shift(const BaseHit& hit) const;
   // Whether shade() and transmittance() treat this hit as near field: the
-  // near-field mode, or a multi-scale footprint below a stitch cell with
-  // near_field_below_cell.
+  // near-field mode, or a multi-scale footprint below a stitch cell (and
+  // outside the class table's sub-cells) with near_field_below_cell.
   bool near_field_at(const BaseHit& hit) const;
 
   // Fraction of light a shadow ray along ray_dir passes through the fabric
@@ -126,6 +131,9 @@ class KnitMaterial {
   // multi-scale footprint table (bytes).
   size_t state_bytes() const;
   const FootprintTable* footprint_table() const { return table_.get(); }
+  // Whether the class table serves a footprint spanned by fx, fy (pattern
+  // units) at pattern point (x, y): whole cells or sub-cells.
+  bool table_serves(float x, float y, Vec3 fx, Vec3 fy) const;
   // Wall time the constructor spent building the multi-scale class table
   // (0 without one): most of a multi-scale material's set-up.
   double table_seconds() const { return table_seconds_; }
@@ -155,8 +163,14 @@ class KnitMaterial {
     fy = k::kv3(us * hit.dudy, us * hit.dvdy, 0);
   }
   // Whether the hit's footprint spans a stitch cell or more in both
-  // directions (knit_footprint_stratified): the class table's domain.
+  // directions (knit_footprint_stratified): the marched aggregate's and
+  // the class table's whole cells.
   bool stratified(const BaseHit& hit) const;
+  // Whether a footprint spanned by fx, fy (pattern units) at pattern point
+  // (x, y) is below a cell in some direction but read from the class
+  // table's sub-cells (table_min_cells; FootprintTable::sub_box).
+  bool sub_cell(float x, float y, Vec3 fx, Vec3 fy) const;
+  bool sub_cell(const BaseHit& hit) const;
   void set_colors(KnitShade& sh, int color_index) const;
   // Palette mixed by a footprint's colour histogram (KNIT_MS_COLORS bins).
   void mix_colors(KnitShade& sh, const float* weights) const;
