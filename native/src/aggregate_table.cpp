@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstring>
 #include <random>
+#include <stdexcept>
 #include <utility>
 
 namespace knit {
@@ -74,7 +75,7 @@ int FootprintTable::cell_class(const KnitSurface& surface, int k, int c) {
 }
 
 FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& capm, int rays_per_direction,
-                               LayerCounts layer_counts) {
+                               LayerCounts layer_counts, bool sub_cells) {
   const k::KnitGeom& g = surface.geom();
   // The cells of each class; for large patterns a uniform sample of at most
   // kMaxCells of them (reservoir sampling, fixed seed), enough for the rays
@@ -144,7 +145,7 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
   moments_.assign(size_t(slots) * kThetaBins * kPhiBins * kMoments, 0.0f);
   constexpr int kSubCells = kSub * kSub;
   // (built in float, stored as bfloat16 at the end)
-  std::vector<float> sub_f(size_t(slots) * kSubCells * kThetaBins * kPhiBins * kMoments, 0.0f);
+  std::vector<float> sub_f(sub_cells ? size_t(slots) * kSubCells * kThetaBins * kPhiBins * kMoments : 0, 0.0f);
   const auto sub_at = [&](size_t slot, int si, int node) {
     return &sub_f[((slot * kSubCells + size_t(si)) * kThetaBins * kPhiBins + size_t(node)) * kMoments];
   };
@@ -249,8 +250,8 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
         }
       }
       all.write(&moments_[((slot * kThetaBins + size_t(it)) * kPhiBins + size_t(ip)) * kMoments]);
-      for (int si = 0; si < kSubCells; ++si)
-        sub[size_t(si)].write(sub_at(slot, si, it * kPhiBins + ip));
+      if (sub_cells)
+        for (int si = 0; si < kSubCells; ++si) sub[size_t(si)].write(sub_at(slot, si, it * kPhiBins + ip));
     }
   });
   // The rows at theta = 0 and pi are one direction each: their columns,
@@ -276,7 +277,7 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
   };
   const size_t block = size_t(kThetaBins) * kPhiBins * kMoments;
   for (size_t b = 0; b < size_t(slots); ++b) average_poles(&moments_[b * block]);
-  for (size_t b = 0; b < size_t(slots) * kSubCells; ++b) average_poles(&sub_f[b * block]);
+  for (size_t b = 0; sub_cells && b < size_t(slots) * kSubCells; ++b) average_poles(&sub_f[b * block]);
   sub_moments_.resize(sub_f.size());
   for (size_t i = 0; i < sub_f.size(); ++i) sub_moments_[i] = to_bf16(sub_f[i]);
 }
@@ -608,6 +609,7 @@ void FootprintTable::for_each_sub(const k::KnitGeom& g, float x, float y, float 
 
 k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, float x, float y, float ex, float ey,
                                                Vec3 wi, float pick) const {
+  if (!has_sub_cells()) throw std::logic_error("FootprintTable::aggregate_sub: the table has no sub-cells");
   const k::KnitGeom& g = surface.geom();
   k::KnitAggregate a{};
   const DirWeights dw = dir_weights(wi);
@@ -715,6 +717,7 @@ k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, float
 
 float FootprintTable::p_delta_sub(const KnitSurface& surface, float x, float y, float ex, float ey,
                                   Vec3 wi) const {
+  if (!has_sub_cells()) throw std::logic_error("FootprintTable::p_delta_sub: the table has no sub-cells");
   const k::KnitGeom& g = surface.geom();
   const DirWeights dw = dir_weights(wi);
   constexpr int kSubCells = kSub * kSub;

@@ -106,7 +106,8 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
   // keep the marched aggregate.
   if (params_.mode == KnitMode::MultiScale && params_.footprint_table && surface_.geom().has_floats == 0) {
     const auto t0 = std::chrono::steady_clock::now();
-    table_ = std::make_shared<const FootprintTable>(surface_, params_.capm_options);
+    table_ = std::make_shared<const FootprintTable>(surface_, params_.capm_options, 256,
+                                                    FootprintTable::LayerCounts::Auto, params_.table_min_cells < 1);
     table_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
 }
@@ -223,7 +224,7 @@ bool KnitMaterial::stratified(const BaseHit& hit) const {
 }
 
 bool KnitMaterial::sub_cell(float x, float y, Vec3 fx, Vec3 fy) const {
-  if (!table_ || params_.table_min_cells >= 1.0f) return false;
+  if (!table_ || !table_->has_sub_cells()) return false;
   const Vec3 e = k::knit_footprint_extent(surface_.geom(), fx, fy);
   if (e.x >= 1.0f && e.y >= 1.0f) return false;  // whole cells
   return e.x >= params_.table_min_cells && e.y >= params_.table_min_cells &&
@@ -231,7 +232,7 @@ bool KnitMaterial::sub_cell(float x, float y, Vec3 fx, Vec3 fy) const {
 }
 
 bool KnitMaterial::sub_cell(const BaseHit& hit) const {
-  if (!table_ || params_.table_min_cells >= 1.0f) return false;
+  if (!table_ || !table_->has_sub_cells()) return false;
   Vec3 fx, fy;
   footprint_axes(hit, fx, fy);
   return sub_cell(params_.uv_scale * hit.u, params_.uv_scale * hit.v, fx, fy);

@@ -696,6 +696,11 @@ TEST(FootprintTable, MaterialReadsSubCellsFromTableMinCells) {
   KnitMaterial half(seed(), mp);
   mp.table_min_cells = 1;
   KnitMaterial whole(seed(), mp);
+  ASSERT_TRUE(half.footprint_table()->has_sub_cells());
+  ASSERT_FALSE(whole.footprint_table()->has_sub_cells());  // not built where they are not read
+  EXPECT_LT(4 * whole.state_bytes(), half.state_bytes());
+  EXPECT_THROW(whole.footprint_table()->p_delta_sub(whole.surface(), 1, 1, 0.6f, 0.6f, k::kv3(0, 0, 1)),
+               std::logic_error);
   const float cw = 6.2831853f, ch = half.surface().geom().row_spacing;
   BaseHit hit;
   hit.u = 0.37f;

@@ -70,8 +70,11 @@ class FootprintTable {
   enum class LayerCounts { Auto, Scalar };
   // Marches `rays_per_direction` rays (flat base) per class present and per
   // direction; uses every hardware thread.
+  // sub_cells: also keep the per-sub-cell statistics (aggregate_sub); a
+  // table without them takes a sixteenth of the memory.
   FootprintTable(const KnitSurface& surface, const CapmOptions& capm, int rays_per_direction = 256,
-                 LayerCounts layer_counts = LayerCounts::Auto);
+                 LayerCounts layer_counts = LayerCounts::Auto, bool sub_cells = true);
+  bool has_sub_cells() const { return !sub_moments_.empty(); }
   // The node statistics (kMoments floats per class present and direction
   // node), for tests.
   const std::vector<float>& node_moments() const { return moments_; }
