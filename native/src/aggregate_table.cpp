@@ -407,7 +407,12 @@ bool FootprintTable::class_counts(const k::KFootprint& f,
   return true;
 }
 
-void FootprintTable::means(k::KnitAggregate& a, const float* sum, Vec3 tsum, float x, float y) {
+// Inline in both aggregates (a call cost 1% of a multi-scale render's
+// instructions, callgrind).
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline void FootprintTable::means(k::KnitAggregate& a, const float* sum, Vec3 tsum, float x, float y) {
   // The hit-weighted means; the slopes' covariance about their mean.
   const float inv = 1 / sum[kHit];
   const float sx = sum[kSlope] * inv, sy = sum[kSlope + 1] * inv;

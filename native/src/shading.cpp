@@ -217,47 +217,44 @@ void KnitMaterial::set_colors(KnitShade& sh, int color_index) const {
   sh.kd_t = params_.bsdf.transmit_colors[size_t(c)];
 }
 
-bool KnitMaterial::stratified(const BaseHit& hit) const {
-  Vec3 fx, fy;
+KnitMaterial::Route KnitMaterial::route(const BaseHit& hit, Vec3& fx, Vec3& fy, Vec3& e) const {
+  if (params_.mode != KnitMode::MultiScale) return Route::NearField;
   footprint_axes(hit, fx, fy);
-  return k::knit_footprint_stratified(surface_.geom(), fx, fy) != 0;
-}
-
-bool KnitMaterial::sub_cell(float x, float y, Vec3 fx, Vec3 fy) const {
-  if (!table_ || !table_->has_sub_cells()) return false;
-  const Vec3 e = k::knit_footprint_extent(surface_.geom(), fx, fy);
-  if (e.x >= 1.0f && e.y >= 1.0f) return false;  // whole cells
-  return e.x >= params_.table_min_cells && e.y >= params_.table_min_cells &&
-         FootprintTable::sub_box(x, y, e.x, e.y, surface_.geom());
-}
-
-bool KnitMaterial::sub_cell(const BaseHit& hit) const {
-  if (!table_ || !table_->has_sub_cells()) return false;
-  Vec3 fx, fy;
-  footprint_axes(hit, fx, fy);
-  return sub_cell(params_.uv_scale * hit.u, params_.uv_scale * hit.v, fx, fy);
+  e = k::knit_footprint_extent(surface_.geom(), fx, fy);
+  // A cell or more in both directions (knit_footprint_stratified's test).
+  if (e.x >= 1.0f && e.y >= 1.0f) return table_ ? Route::Cells : Route::Marched;
+  if (table_ && table_->has_sub_cells() && e.x >= params_.table_min_cells && e.y >= params_.table_min_cells &&
+      FootprintTable::sub_box(params_.uv_scale * hit.u, params_.uv_scale * hit.v, e.x, e.y, surface_.geom()))
+    return Route::SubCells;
+  return params_.near_field_below_cell ? Route::NearField : Route::Marched;
 }
 
 bool KnitMaterial::table_serves(float x, float y, Vec3 fx, Vec3 fy) const {
   if (!table_) return false;
-  return k::knit_footprint_stratified(surface_.geom(), fx, fy) != 0 || sub_cell(x, y, fx, fy);
+  const Vec3 e = k::knit_footprint_extent(surface_.geom(), fx, fy);
+  if (e.x >= 1.0f && e.y >= 1.0f) return true;
+  return table_->has_sub_cells() && e.x >= params_.table_min_cells && e.y >= params_.table_min_cells &&
+         FootprintTable::sub_box(x, y, e.x, e.y, surface_.geom());
 }
 
 bool KnitMaterial::near_field_at(const BaseHit& hit) const {
-  if (params_.mode != KnitMode::MultiScale) return true;
-  return params_.near_field_below_cell && !stratified(hit) && !sub_cell(hit);
+  Vec3 fx, fy, e;
+  return route(hit, fx, fy, e) == Route::NearField;
 }
 
 bool KnitMaterial::uses_shift(const BaseHit& hit) const {
-  if (params_.mode != KnitMode::MultiScale) return false;  // one ray, no footprint points
-  const bool by_cell = stratified(hit);
-  // The sub-cells read the shift only to pick one colour of many.
-  if (!by_cell && sub_cell(hit)) return params_.bsdf.num_colors() > KNIT_MS_COLORS;
-  if (!by_cell && params_.near_field_below_cell) return false;  // the near field, as above
-  // From the class table (the same test as shade's) with no points: only a
-  // marched footprint reads the shift.
-  if (!table_ || !table_->counts_without_points()) return true;
-  return !by_cell;
+  Vec3 fx, fy, e;
+  switch (route(hit, fx, fy, e)) {
+    case Route::NearField:
+      return false;  // one ray, no footprint points
+    case Route::SubCells:
+      return params_.bsdf.num_colors() > KNIT_MS_COLORS;  // only to pick one colour of many
+    case Route::Cells:
+      return !table_->counts_without_points();  // the colours' or the box's points
+    case Route::Marched:
+      break;
+  }
+  return true;
 }
 
 KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
@@ -270,18 +267,16 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
   sh.from_back = wi.z < 0;
   const float top = surface_.shell_top();
 
-  if (!near_field_at(hit)) {
-    Vec3 fx, fy;
-    footprint_axes(hit, fx, fy);
+  Vec3 fx, fy, e;
+  const Route rt = route(hit, fx, fy, e);
+  if (rt != Route::NearField) {
     const int points = footprint_points_for(fx, fy);
-    const bool half_cells = sub_cell(x, y, fx, fy);
-    const k::KFootprint f = k::knit_footprint(surface_.geom(), x, y, fx, fy, points, shift[0], shift[1]);
     k::KnitAggregate a;
-    if (half_cells) {
-      const Vec3 e = k::knit_footprint_extent(surface_.geom(), fx, fy);
+    if (rt == Route::SubCells) {
       a = table_->aggregate_sub(surface_, x, y, e.x, e.y, wi, shift[0]);  // flat-base, as below
       sh.from_table = true;
-    } else if (table_ && f.stratified) {
+    } else if (rt == Route::Cells) {
+      const k::KFootprint f = k::knit_footprint(surface_.geom(), x, y, fx, fy, points, shift[0], shift[1]);
       a = table_->aggregate(surface_, f, wi);  // flat-base statistics: no curvature needed
       sh.from_table = true;
     } else {
@@ -431,19 +426,16 @@ float KnitMaterial::transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameP
                                   std::array<float, 2> shift) const {
   // Only whether the ray meets yarn (or how often, over a footprint): no
   // shading frame, layer count or ply profile.
-  if (!near_field_at(hit)) {
+  Vec3 fx, fy, e;
+  const Route rt = route(hit, fx, fy, e);
+  if (rt != Route::NearField) {
     const float S = hit.pattern_per_world, us = params_.uv_scale;
     const float x = us * hit.u, y = us * hit.v;
     const Vec3 wi = k::kv3_neg(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n));
-    Vec3 fx, fy;
-    footprint_axes(hit, fx, fy);
-    if (sub_cell(x, y, fx, fy)) {
-      const Vec3 e = k::knit_footprint_extent(surface_.geom(), fx, fy);
-      return table_->p_delta_sub(surface_, x, y, e.x, e.y, wi);
-    }
+    if (rt == Route::SubCells) return table_->p_delta_sub(surface_, x, y, e.x, e.y, wi);
     const k::KFootprint f =
         k::knit_footprint(surface_.geom(), x, y, fx, fy, footprint_points_for(fx, fy), shift[0], shift[1]);
-    if (table_ && f.stratified) return table_->p_delta(surface_, f, wi);
+    if (rt == Route::Cells) return table_->p_delta(surface_, f, wi);
     // (the curvature only for the marched footprint: a frame lookup)
     const Vec3 kap = frame ? frame->curvature(x, y) : k::kv3(hit.kx / S, hit.ky / S, 0);
     return k::knit_footprint_p_delta(surface_.geom(), surface_.codes(), surface_.colors(), f, wi, kap.x, kap.y,

@@ -162,15 +162,15 @@ class KnitMaterial {
     fx = k::kv3(us * hit.dudx, us * hit.dvdx, 0);
     fy = k::kv3(us * hit.dudy, us * hit.dvdy, 0);
   }
-  // Whether the hit's footprint spans a stitch cell or more in both
-  // directions (knit_footprint_stratified): the marched aggregate's and
-  // the class table's whole cells.
-  bool stratified(const BaseHit& hit) const;
-  // Whether a footprint spanned by fx, fy (pattern units) at pattern point
-  // (x, y) is below a cell in some direction but read from the class
-  // table's sub-cells (table_min_cells; FootprintTable::sub_box).
-  bool sub_cell(float x, float y, Vec3 fx, Vec3 fy) const;
-  bool sub_cell(const BaseHit& hit) const;
+  // How shade() and transmittance() treat a hit: the near field (one CAPM
+  // ray); a multi-scale footprint of a cell or more in both directions
+  // (knit_footprint_stratified's test) from the class table's whole
+  // cells; one of table_min_cells or more but below a cell in some
+  // direction from its sub-cells (FootprintTable::sub_box); else the
+  // marched aggregate. Sets the footprint's axes and extent (cells) for
+  // the multi-scale routes.
+  enum class Route { NearField, Cells, SubCells, Marched };
+  Route route(const BaseHit& hit, Vec3& fx, Vec3& fy, Vec3& extent) const;
   void set_colors(KnitShade& sh, int color_index) const;
   // Palette mixed by a footprint's colour histogram (KNIT_MS_COLORS bins).
   void mix_colors(KnitShade& sh, const float* weights) const;
