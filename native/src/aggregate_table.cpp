@@ -588,8 +588,10 @@ int64_t floor_div(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1)
 }  // namespace
 
 bool FootprintTable::sub_box(float x, float y, float ex, float ey, const k::KnitGeom& g) {
-  if (!(ex >= 0.5f && ey >= 0.5f) || !std::isfinite(ex) || !std::isfinite(ey) || !std::isfinite(x) ||
-      !std::isfinite(y) || ex > float(kMaxSubBox) || ey > float(kMaxSubBox))
+  // (1e9 pattern units: beyond the kernel's own float range, and the
+  // sub-cell indices stay far inside int64)
+  if (!(ex >= 0.5f && ey >= 0.5f) || !(ex <= float(kMaxSubBox) && ey <= float(kMaxSubBox)) ||
+      !(std::fabs(x) <= 1e9f && std::fabs(y) <= 1e9f))
     return false;
   const SubRange rx = sub_range(x, ex, K_2PI, kSub), ry = sub_range(y, ey, g.row_spacing, kSub);
   return (rx.last - rx.first + 1) * (ry.last - ry.first + 1) <= kMaxSubBox;
@@ -616,6 +618,7 @@ k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, float
                                                Vec3 wi, float pick) const {
   if (!has_sub_cells()) throw std::logic_error("FootprintTable::aggregate_sub: the table has no sub-cells");
   const k::KnitGeom& g = surface.geom();
+  if (!sub_box(x, y, ex, ey, g)) throw std::invalid_argument("FootprintTable::aggregate_sub: not a sub-cell box");
   k::KnitAggregate a{};
   const DirWeights dw = dir_weights(wi);
   constexpr int kSubCells = kSub * kSub;
@@ -724,6 +727,7 @@ float FootprintTable::p_delta_sub(const KnitSurface& surface, float x, float y, 
                                   Vec3 wi) const {
   if (!has_sub_cells()) throw std::logic_error("FootprintTable::p_delta_sub: the table has no sub-cells");
   const k::KnitGeom& g = surface.geom();
+  if (!sub_box(x, y, ex, ey, g)) throw std::invalid_argument("FootprintTable::p_delta_sub: not a sub-cell box");
   const DirWeights dw = dir_weights(wi);
   constexpr int kSubCells = kSub * kSub;
   std::array<double, kClasses * kSubCells> area{};

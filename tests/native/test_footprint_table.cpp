@@ -701,6 +701,19 @@ TEST(FootprintTable, MaterialReadsSubCellsFromTableMinCells) {
   EXPECT_LT(4 * whole.state_bytes(), half.state_bytes());
   EXPECT_THROW(whole.footprint_table()->p_delta_sub(whole.surface(), 1, 1, 0.6f, 0.6f, k::kv3(0, 0, 1)),
                std::logic_error);
+  // Boxes outside the sub-cells' domain are refused, not read out of bounds.
+  const FootprintTable& tb = *half.footprint_table();
+  const k::KnitGeom& g = half.surface().geom();
+  for (const std::array<float, 4>& b : std::vector<std::array<float, 4>>{{1, 1, 0.4f, 0.6f},
+                                                                       {1, 1, 0.6f, 70.0f},
+                                                                       {1e30f, 1, 0.6f, 0.6f},
+                                                                       {1, std::nanf(""), 0.6f, 0.6f},
+                                                                       {1, 1, std::nanf(""), 0.6f},
+                                                                       {1, 1, 0.6f, INFINITY}}) {
+    EXPECT_FALSE(FootprintTable::sub_box(b[0], b[1], b[2], b[3], g)) << b[0] << " " << b[1] << " " << b[2] << " " << b[3];
+    EXPECT_THROW(tb.aggregate_sub(half.surface(), b[0], b[1], b[2], b[3], k::kv3(0, 0, 1)), std::invalid_argument);
+  }
+  EXPECT_TRUE(FootprintTable::sub_box(-5e3f, 7e3f, 0.5f, 1.7f, g));
   const float cw = 6.2831853f, ch = half.surface().geom().row_spacing;
   BaseHit hit;
   hit.u = 0.37f;
