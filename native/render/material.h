@@ -53,6 +53,7 @@ struct PassThrough {
   bool pass = false;
   Rgb weight{1.0f};
   bool from_table = false;  // the knit model read the hit from its multi-scale class table
+  bool from_sub_cells = false;  // ... from the table's sub-cells
   bool aggregated = false;  // the knit model aggregated marches over the hit's multi-scale footprint
 };
 

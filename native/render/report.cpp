@@ -82,11 +82,13 @@ std::string RenderReport::to_text() const {
     }
     if (table_resolves > 0 || aggregate_resolves > 0) {
       const double table = 100.0 * double(table_resolves) / double(resolves);
+      const double sub = 100.0 * double(sub_cell_resolves) / double(resolves);
       const double aggregated = 100.0 * double(aggregate_resolves) / double(resolves);
       std::snprintf(buf, sizeof buf,
-                    "  multi-scale %.1f%% of the knit hits from the class table, %.1f%% aggregated over marched "
-                    "points, %.1f%% as the near field (footprints below a stitch cell, bounces)\n",
-                    table, aggregated, std::max(0.0, 100.0 - table - aggregated));
+                    "  multi-scale %.1f%% of the knit hits from the class table (%.1f%% whole cells, %.1f%% "
+                    "sub-cells), %.1f%% aggregated over marched points, %.1f%% as the near field (small "
+                    "footprints, bounces)\n",
+                    table, table - sub, sub, aggregated, std::max(0.0, 100.0 - table - aggregated));
       s += buf;
     }
     if (explicit_yarns) {
@@ -143,6 +145,7 @@ std::string RenderReport::to_json() const {
   j["knit"] = {{"materials", knit_materials}, {"explicit_yarns", explicit_yarns},
                {"hits", resolves}, {"hits_passed", resolve_passes}, {"shadow_crossings", shadow_resolves},
                {"shell_bounces", shell_bounces}, {"table_hits", table_resolves},
+               {"sub_cell_hits", sub_cell_resolves},
                {"aggregated_hits", aggregate_resolves}, {"marches_spared", marches_spared},
                {"yarn_points", yarn_points}, {"yarn_segments", yarn_segments}, {"yarn_curves", yarn_curves},
                {"yarn_build_seconds", yarn_build_seconds}};

@@ -275,6 +275,7 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     if (rt == Route::SubCells) {
       a = table_->aggregate_sub(surface_, x, y, e.x, e.y, wi, shift[0]);  // flat-base, as below
       sh.from_table = true;
+      sh.from_sub_cells = true;
     } else if (rt == Route::Cells) {
       const k::KFootprint f = k::knit_footprint(surface_.geom(), x, y, fx, fy, points, shift[0], shift[1]);
       a = table_->aggregate(surface_, f, wi);  // flat-base statistics: no curvature needed

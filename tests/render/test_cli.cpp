@@ -236,6 +236,33 @@ TEST(Cli, ReportsHowMultiScaleHitsWereShaded) {
   }
 }
 
+// At uv_scale 60 nearly every camera footprint is half a cell to a cell:
+// the class table's sub-cells by default, counted apart in the report;
+// with table_min_cells 1 none of them.
+TEST(Cli, ReportsTheClassTablesSubCells) {
+  const std::string dir = test::test_dir();
+  for (const char* min_cells : {"0.5", "1"}) {
+    const std::string scene = test::write_file(
+        dir, "scene.json",
+        small_scene(std::string(R"({"type": "knit", "pattern": ["KP", "PK"], "uv_scale": 60, "mode": "multi_scale",
+                                    "table_min_cells": )") +
+                    min_cells + R"(, "yarn_colors": [[0.7, 0.1, 0.1]]})"));
+    const CliRun r = run(dir, "render " + scene + " -o " + dir + "/ms.exr --report " + dir + "/ms.json");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const nlohmann::json k = nlohmann::json::parse(test::read_file(dir + "/ms.json"))["knit"];
+    const uint64_t hits = k["hits"], table = k["table_hits"], sub = k["sub_cell_hits"];
+    ASSERT_GT(hits, 100u);
+    EXPECT_LE(sub, table);
+    if (std::string(min_cells) == "0.5") {
+      EXPECT_GT(sub, hits / 2) << r.out;
+      EXPECT_NE(r.out.find("sub-cells)"), std::string::npos) << r.out;
+    } else {
+      EXPECT_EQ(sub, 0u);
+      EXPECT_LT(table, hits / 2) << "below a cell: the near field";
+    }
+  }
+}
+
 TEST(Cli, ReportsTheClassTableBuildApartFromParsing) {
   // A multi-scale knit builds its class table while the scene is parsed:
   // the report gives that time its own entry, and the parts still add up.

@@ -74,6 +74,7 @@ struct KnitShade {
   k::KMicrofacet spec_r{}, spec_t{};  // specular lobes at this point (multi-scale: LEAN-widened)
   int steps = 0;             // CAPM segments marched (summed over footprint points)
   bool from_table = false;   // multi-scale: the footprint came from the class table (no march)
+  bool from_sub_cells = false;  // ... from its sub-cells (a footprint below a cell)
   bool aggregated = false;   // multi-scale: the footprint's points were marched and aggregated
   // Near field: the yarn point hit, inside the shell (pattern space). Light
   // and bounces leaving it cross the rest of the shell first: occluded_from
