@@ -319,4 +319,51 @@ TEST(Shading, PathsFromAYarnHitMeetOtherYarnAsExplicitTubesDo) {
   EXPECT_TRUE(m.shade_from(bh, sh, k::kv3(0, 0, 1), nullptr).pass_through);
 }
 
+// The same for light transmitted through the yarn (a light or a sampled
+// direction behind the hit's surface): the path first crosses the hit's own
+// tube, which must not count, then meets other yarn or leaves the shell.
+// Truth: the ray cast from the explicit tube's hit point leaves the union of
+// tubes containing it, then meets a tube or not before the shell's surface.
+TEST(Shading, PathsThroughTheHitYarnMeetOtherYarnAsExplicitTubesDo) {
+  for (const NamedPattern& np : {NamedPattern{"stockinette", stockinette()}, NamedPattern{"rib_1x1", rib_1x1()},
+                                 NamedPattern{"seed", seed()}}) {
+    GroundTruthScene sc(np.pattern, StitchParams{}, 0, 45);
+    KnitMaterialParams mp = flat_params();
+    mp.ply_detail = false;
+    KnitMaterial m(np.pattern, mp);
+    const double r = sc.surface.params().r, top = sc.surface.shell_top();
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> U(0, 1);
+    int n = 0, agree = 0, occluded = 0;
+    for (int i = 0; i < 6000 && n < 600; ++i) {
+      const ViewSample v = view_sample(sc, m, rng, 1.2);
+      const TubeHit& gt = v.gt;
+      if (!gt.hit || v.sh.pass_through) continue;
+      if (norm(sub(D3{v.sh.p_yarn.x, v.sh.p_yarn.y, v.sh.p_yarn.z}, gt.p)) > 0.02 * r) continue;
+      const double lz = 2 * U(rng) - 1, lp = 6.283 * U(rng), ls = std::sqrt(1 - lz * lz);
+      const D3 L = {ls * std::cos(lp), ls * std::sin(lp), lz};
+      if (dot(L, gt.normal) > -0.1 || std::fabs(L[2]) < 0.05) continue;  // into the tube, not along the shell
+      const double t_exit = L[2] > 0 ? (top - gt.p[2]) / L[2] : (gt.p[2] + top) / -L[2];
+      double te = 0.05 * r;  // out of the tubes holding the start, in steps of 0.002
+      while (te < t_exit && sc.tubes.inside(add(gt.p, mul(L, te)))) te += 0.002;
+      const bool truth = te < t_exit && sc.tubes.intersect(gt.p, L, te + 1e-6, t_exit).hit;
+      // Skip the paths that graze a tube (the truth flips under a 3% r move).
+      const D3 p3 = add(gt.p, mul(gt.normal, -0.03 * r));
+      double te3 = 0.05 * r;
+      while (te3 < t_exit && sc.tubes.inside(add(p3, mul(L, te3)))) te3 += 0.002;
+      if (truth != (te3 < t_exit && sc.tubes.intersect(p3, L, te3 + 1e-6, t_exit).hit)) continue;
+      ++n;
+      const bool occ = m.occluded_from(v.bh, v.sh, k::kv3(float(L[0]), float(L[1]), float(L[2])), nullptr);
+      occluded += truth;
+      agree += occ == truth;
+    }
+    std::printf("[self-shadow] %-12s transmitted paths %d: agreement %.2f%%, occluded (truth) %.1f%%\n",
+                np.name.c_str(), n, 100.0 * agree / std::max(n, 1), 100.0 * occluded / std::max(n, 1));
+    EXPECT_GE(n, 400) << np.name;
+    EXPECT_GT(occluded, n / 10) << np.name << ": too few occluded paths for a meaningful test";
+    EXPECT_LT(occluded, n * 9 / 10) << np.name << ": too few open paths for a meaningful test";
+    EXPECT_GE(agree, n * 98 / 100) << np.name;
+  }
+}
+
 }  // namespace
