@@ -412,7 +412,20 @@ bool FootprintTable::class_counts(const k::KFootprint& f,
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
-inline void FootprintTable::means(k::KnitAggregate& a, const float* sum, Vec3 tsum, float x, float y) {
+inline bool FootprintTable::finish(k::KnitAggregate& a, int points, float p_delta, const float* sum, Vec3 tsum,
+                                   float x, float y) {
+  a.points = points;
+  a.p_delta = p_delta;
+  const float hit = 1 - a.p_delta;  // the hit fraction over the box
+  a.hits = hit > 0 ? std::max(1, int(std::lround(hit * float(a.points)))) : 0;
+  a.steps = 0;
+  a.color_pick = -1;
+  if (!(hit > 0 && sum[kHit] > 0)) {
+    a.n = k::kv3(0, 0, 1);
+    a.tangent = k::kv3(1, 0, 0);
+    a.position = k::kv3(x, y, 0);
+    return false;
+  }
   // The hit-weighted means; the slopes' covariance about their mean.
   const float inv = 1 / sum[kHit];
   const float sx = sum[kSlope] * inv, sy = sum[kSlope + 1] * inv;
@@ -423,6 +436,7 @@ inline void FootprintTable::means(k::KnitAggregate& a, const float* sum, Vec3 ts
   a.sxy = sum[kSlope2 + 1] * inv - sx * sy;
   a.syy = std::max(sum[kSlope2 + 2] * inv - sy * sy, 0.0f);
   a.layers = sum[kLayers] * inv;
+  return true;
 }
 
 k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
@@ -506,19 +520,7 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
   }
   // In points: the cells of a box of up to KNIT_MS_MAX_POINTS, else the
   // footprint's points (a counted box may hold up to 1e10 cells).
-  a.points = all_cells(f) ? int(cells) : f.n;
-  a.p_delta = pass_fraction(hits, cells);
-  const float hit = 1 - a.p_delta;  // the hit fraction over the box
-  a.hits = hit > 0 ? std::max(1, int(std::lround(hit * float(a.points)))) : 0;
-  a.steps = 0;
-  a.color_pick = -1;
-  if (!(hit > 0 && sum[kHit] > 0)) {
-    a.n = k::kv3(0, 0, 1);
-    a.tangent = k::kv3(1, 0, 0);
-    a.position = k::kv3(f.x, f.y, 0);
-    return a;
-  }
-  means(a, sum.data(), tsum, f.x, f.y);
+  if (!finish(a, all_cells(f) ? int(cells) : f.n, pass_fraction(hits, cells), sum.data(), tsum, f.x, f.y)) return a;
   if (one_colour_) {
     a.color_w[0] = 1;
     a.color_pick = 0;
@@ -653,19 +655,7 @@ k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, float
       hit_of[size_t(ps)] = std::clamp(h, 0.0f, 1.0f);
       hits += double(share) * double(hit_of[size_t(ps)]);
     }
-  a.points = touched;
-  a.p_delta = std::clamp(float(1 - hits), 0.0f, 1.0f);
-  const float hit = 1 - a.p_delta;
-  a.hits = hit > 0 ? std::max(1, int(std::lround(hit * float(a.points)))) : 0;
-  a.steps = 0;
-  a.color_pick = -1;
-  if (!(hit > 0 && sum[kHit] > 0)) {
-    a.n = k::kv3(0, 0, 1);
-    a.tangent = k::kv3(1, 0, 0);
-    a.position = k::kv3(x, y, 0);
-    return a;
-  }
-  means(a, sum.data(), tsum, x, y);
+  if (!finish(a, touched, std::clamp(float(1 - hits), 0.0f, 1.0f), sum.data(), tsum, x, y)) return a;
   if (one_colour_) {
     a.color_w[0] = 1;
     a.color_pick = 0;

@@ -255,13 +255,22 @@ TEST(Shading, MultiScaleShowsColourIndicesPastEight) {
 // the path towards a light (or a sampled direction) either leaves the shell
 // or meets other yarn first. Checked against double-precision ray casts of the
 // explicit tubes from the tubes' own hit point.
+// The patterns of the self-shadowing comparisons, and their material: flat
+// base, no ply detail (plain round tubes, as the explicit ones).
+std::vector<NamedPattern> shadow_patterns() {
+  return {NamedPattern{"stockinette", stockinette()}, NamedPattern{"seed", seed()},
+          NamedPattern{"rib_1x1", rib_1x1()}};
+}
+KnitMaterialParams tube_params() {
+  KnitMaterialParams mp = flat_params();
+  mp.ply_detail = false;
+  return mp;
+}
+
 TEST(Shading, PathsFromAYarnHitMeetOtherYarnAsExplicitTubesDo) {
-  for (const NamedPattern& np : {NamedPattern{"stockinette", stockinette()}, NamedPattern{"seed", seed()},
-                                 NamedPattern{"rib_1x1", rib_1x1()}}) {
+  for (const NamedPattern& np : shadow_patterns()) {
     GroundTruthScene sc(np.pattern, StitchParams{}, 0, 45);
-    KnitMaterialParams mp = flat_params();
-    mp.ply_detail = false;
-    KnitMaterial m(np.pattern, mp);
+    KnitMaterial m(np.pattern, tube_params());
     const double r = sc.surface.params().r, top = sc.surface.shell_top();
     std::mt19937 rng(7);
     std::uniform_real_distribution<double> U(0, 1);
@@ -325,12 +334,9 @@ TEST(Shading, PathsFromAYarnHitMeetOtherYarnAsExplicitTubesDo) {
 // Truth: the ray cast from the explicit tube's hit point leaves the union of
 // tubes containing it, then meets a tube or not before the shell's surface.
 TEST(Shading, PathsThroughTheHitYarnMeetOtherYarnAsExplicitTubesDo) {
-  for (const NamedPattern& np : {NamedPattern{"stockinette", stockinette()}, NamedPattern{"rib_1x1", rib_1x1()},
-                                 NamedPattern{"seed", seed()}}) {
+  for (const NamedPattern& np : shadow_patterns()) {
     GroundTruthScene sc(np.pattern, StitchParams{}, 0, 45);
-    KnitMaterialParams mp = flat_params();
-    mp.ply_detail = false;
-    KnitMaterial m(np.pattern, mp);
+    KnitMaterial m(np.pattern, tube_params());
     const double r = sc.surface.params().r, top = sc.surface.shell_top();
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> U(0, 1);

@@ -175,10 +175,11 @@ class FootprintTable {
   // visit(row k, column c, sub-cell index, area) for each.
   template <class Visit>
   static void for_each_sub(const k::KnitGeom& g, float x, float y, float ex, float ey, Visit&& visit);
-  // The hit-weighted means of summed moments `sum` (kLinear floats) and
-  // tangent sum `tsum` into a: normal, tangent, height, slope covariance,
-  // layers.
-  static void means(k::KnitAggregate& a, const float* sum, Vec3 tsum, float x, float y);
+  // Fills a from `points`, the box's p_delta, its summed moments `sum`
+  // (kLinear floats) and tangent sum `tsum`: the hit count, and the
+  // hit-weighted means (normal, tangent, height at (x, y), slope covariance,
+  // layers). False when nothing is hit (a has the defaults of a miss).
+  static bool finish(k::KnitAggregate& a, int points, float p_delta, const float* sum, Vec3 tsum, float x, float y);
   float hit_fraction(int cls, const DirWeights& d) const;  // bilinear in direction
   float slot_hit_fraction(int slot, const DirWeights& d) const;  // the same by slot
   // The shares of a class's hits on the 3 x 3 block around the cell, in direction d.
