@@ -8,6 +8,7 @@
 #include <cstring>
 #include <random>
 #include <stdexcept>
+#include <type_traits>
 #include <utility>
 
 namespace knit {
@@ -45,6 +46,13 @@ inline void add_scaled(float* s, const float* m, float w) {
 }  // namespace
 
 namespace {
+
+inline float bf16_to_float(uint16_t v) {
+  const uint32_t bits = uint32_t(v) << 16;
+  float f;
+  std::memcpy(&f, &bits, sizeof f);
+  return f;
+}
 
 // A float's bfloat16: its upper 16 bits, rounded to nearest (ties to even);
 // the statistics are finite.
@@ -278,13 +286,25 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
   const size_t block = size_t(kThetaBins) * kPhiBins * kMoments;
   for (size_t b = 0; b < size_t(slots); ++b) average_poles(&moments_[b * block]);
   for (size_t b = 0; sub_cells && b < size_t(slots) * kSubCells; ++b) average_poles(&sub_f[b * block]);
-  sub_moments_.resize(sub_f.size());
-  for (size_t i = 0; i < sub_f.size(); ++i) sub_moments_[i] = to_bf16(sub_f[i]);
+  if (one_colour_) {
+    static_assert(kSubLinear1 == kNear + 1 && kSubStride1 >= kSubLinear1 + 3, "the one-colour sub-cell node");
+    const size_t nodes = sub_f.size() / kMoments;
+    sub_moments_.assign(nodes * kSubStride1, 0);
+    for (size_t i = 0; i < nodes; ++i) {
+      const float* m = &sub_f[i * kMoments];
+      uint16_t* o = &sub_moments_[i * kSubStride1];
+      for (int q = 0; q < kNear; ++q) o[q] = to_bf16(m[q]);  // (o[kNear] stays 0)
+      for (int q = 0; q < 3; ++q) o[kSubLinear1 + q] = to_bf16(m[kTangent + q]);
+    }
+  } else {
+    sub_moments_.resize(sub_f.size());
+    for (size_t i = 0; i < sub_f.size(); ++i) sub_moments_[i] = to_bf16(sub_f[i]);
+  }
 }
 
 std::vector<float> FootprintTable::sub_moments() const {
-  std::vector<float> out(sub_moments_.size());
   const size_t node = kMoments;
+  std::vector<float> out(sub_moments_.size() / (one_colour_ ? kSubStride1 : kMoments) * node, 0.0f);
   for (size_t i = 0; i < out.size() / node; ++i) {
     const int per_slot = kSub * kSub * kThetaBins * kPhiBins;
     const int slot = int(i / size_t(per_slot)), rest = int(i % size_t(per_slot));
@@ -602,16 +622,26 @@ bool FootprintTable::sub_box(float x, float y, float ex, float ey, const k::Knit
 template <class Visit>
 void FootprintTable::for_each_sub(const k::KnitGeom& g, float x, float y, float ex, float ey, Visit&& visit) {
   const SubRange rx = sub_range(x, ex, K_2PI, kSub), ry = sub_range(y, ey, g.row_spacing, kSub);
+  const int64_t kc0 = floor_div(rx.first, kSub);
+  const int cm0 = k::k_modi(int(kc0), g.cols);  // (the box's columns stay far inside int: sub_box)
   for (int64_t j = ry.first; j <= ry.last; ++j) {
     const double wy = std::min(ry.hi, double(j + 1)) - std::max(ry.lo, double(j));
     if (!(wy > 0)) continue;
     const int64_t kr = floor_div(j, kSub);
     const int sy = int(j - kr * kSub);
+    // The cell's place in the pattern as knit_cell_index has it, its column
+    // wrapped by hand along the row (no integer division per sub-cell).
+    const size_t row = size_t(g.rows - 1 - k::k_modi(int(kr), g.rows)) * size_t(g.cols);
+    int64_t kc = kc0;
+    int cm = cm0;
     for (int64_t i = rx.first; i <= rx.last; ++i) {
+      if (i >= (kc + 1) * kSub) {
+        ++kc;
+        if (++cm == g.cols) cm = 0;
+      }
       const double wx = std::min(rx.hi, double(i + 1)) - std::max(rx.lo, double(i));
       if (!(wx > 0)) continue;
-      const int64_t kc = floor_div(i, kSub);
-      visit(int(kr), int(kc), sy * kSub + int(i - kc * kSub), wx * wy);
+      visit(int(kr), int(kc), row + size_t(cm), sy * kSub + int(i - kc * kSub), wx * wy);
     }
   }
 }
@@ -629,8 +659,8 @@ k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, float
   std::array<double, kClasses * kSubCells> area{};
   double total = 0;
   int touched = 0;
-  for_each_sub(g, x, y, ex, ey, [&](int kr, int kc, int sub, double w) {
-    const int slot = slot_[class_of_[size_t(k::knit_cell_index(g, kr, kc))]];
+  for_each_sub(g, x, y, ex, ey, [&](int, int, size_t cell, int sub, double w) {
+    const int slot = slot_[class_of_[cell]];
     area[size_t(slot * kSubCells + sub)] += w;
     total += w;
     ++touched;
@@ -639,22 +669,39 @@ k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, float
   Vec3 tsum = k::kv3(0, 0, 0);
   std::array<float, kClasses * kSubCells> hit_of{};  // hit fraction per pair, for the colours
   double hits = 0;
-  if (total > 0)
+  // Each (class, sub-cell) pair's four direction nodes, weighted by its
+  // share of the box times their bilinear weights; kStride values a node,
+  // the first kLin summed (with one colour the neighbour shares are
+  // neither kept nor summed), the tangent at kTan.
+  const auto sum_pairs = [&](auto stride, auto lin, auto tan) {
+    constexpr int kStride = decltype(stride)::value, kLin = decltype(lin)::value, kTan = decltype(tan)::value;
     for (int ps = 0; ps < slots_ * kSubCells; ++ps) {
       if (!(area[size_t(ps)] > 0)) continue;
       const float share = float(area[size_t(ps)] / total);
+      const uint16_t* pair = &sub_moments_[size_t(ps) * kThetaBins * kPhiBins * kStride];
       float h = 0;
       for (int q = 0; q < 4; ++q) {
         const float w = share * dw.w[size_t(q)];
-        float m[kMoments];
-        sub_node(ps / kSubCells, ps % kSubCells, dw.node[size_t(q)], m);
+        const uint16_t* p = pair + size_t(dw.node[size_t(q)]) * kStride;
+        float m[kLin], t[3];
+        for (int i = 0; i < kLin; ++i) m[i] = bf16_to_float(p[i]);
+        for (int i = 0; i < 3; ++i) t[i] = bf16_to_float(p[kTan + i]);
         h += dw.w[size_t(q)] * m[kHit];
-        add_scaled<kLinear>(sum.data(), m, w);
-        tsum = add_line(tsum, k::kv3_scale(k::kv3(m[kTangent], m[kTangent + 1], m[kTangent + 2]), w));
+        add_scaled<kLin>(sum.data(), m, w);
+        tsum = add_line(tsum, k::kv3_scale(k::kv3(t[0], t[1], t[2]), w));
       }
       hit_of[size_t(ps)] = std::clamp(h, 0.0f, 1.0f);
       hits += double(share) * double(hit_of[size_t(ps)]);
     }
+  };
+  if (total > 0) {
+    if (one_colour_)
+      sum_pairs(std::integral_constant<int, kSubStride1>{}, std::integral_constant<int, kSubLinear1>{},
+                std::integral_constant<int, kSubLinear1>{});
+    else
+      sum_pairs(std::integral_constant<int, kMoments>{}, std::integral_constant<int, kLinear>{},
+                std::integral_constant<int, kTangent>{});
+  }
   if (!finish(a, touched, std::clamp(float(1 - hits), 0.0f, 1.0f), sum.data(), tsum, x, y)) return a;
   if (one_colour_) {
     a.color_w[0] = 1;
@@ -667,8 +714,8 @@ k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, float
   double visit_hits = 0;
   bool picked = false;
   const double target = double(k::knit_frac(pick)) * hits * total;
-  for_each_sub(g, x, y, ex, ey, [&](int kr, int kc, int sub, double w) {
-    const int slot = slot_[class_of_[size_t(k::knit_cell_index(g, kr, kc))]];
+  for_each_sub(g, x, y, ex, ey, [&](int kr, int kc, size_t cell, int sub, double w) {
+    const int slot = slot_[class_of_[cell]];
     const float h = hit_of[size_t(slot * kSubCells + sub)];
     if (!(h > 0)) return;
     float near[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
@@ -722,8 +769,8 @@ float FootprintTable::p_delta_sub(const KnitSurface& surface, float x, float y, 
   constexpr int kSubCells = kSub * kSub;
   std::array<double, kClasses * kSubCells> area{};
   double total = 0;
-  for_each_sub(g, x, y, ex, ey, [&](int kr, int kc, int sub, double w) {
-    area[size_t(slot_[class_of_[size_t(k::knit_cell_index(g, kr, kc))]] * kSubCells + sub)] += w;
+  for_each_sub(g, x, y, ex, ey, [&](int, int, size_t cell, int sub, double w) {
+    area[size_t(slot_[class_of_[cell]] * kSubCells + sub)] += w;
     total += w;
   });
   if (!(total > 0)) return 1;

@@ -156,23 +156,40 @@ class FootprintTable {
     kNear = 11,    // 9 shares of the hits on the yarn of cell (k + dk, c + dc), at (dk + 1) * 3 + dc + 1
     kLinear = 20,  // the moments above mix linearly
     kTangent = 20, // tx, ty, tz (times hit): a line, mixed sign-aligned
-    kMoments = 24
+    kMoments = 24,
+    // A sub-cell node of a one-colour pattern: kHit..kZ and a zero (the
+    // first neighbour share's place), then the tangent and a zero.
+    kSubLinear1 = 12,
+    kSubStride1 = 16
   };
   const float* moments(int slot, int node) const {
     return &moments_[(size_t(slot) * kThetaBins * kPhiBins + size_t(node)) * kMoments];
   }
   // Node `node` of sub-cell `sub` of class slot `slot`, unpacked into m
   // (kMoments floats).
+  // (kMoments floats; with one colour index the neighbour shares are not
+  // kept and read as zeros, and only the first kSubLinear1 moments and the
+  // tangent are set.)
   void sub_node(int slot, int sub, int node, float* m) const {
+    const size_t stride = one_colour_ ? size_t(kSubStride1) : size_t(kMoments);
     const uint16_t* p =
-        &sub_moments_[((size_t(slot) * kSub * kSub + size_t(sub)) * kThetaBins * kPhiBins + size_t(node)) * kMoments];
-    for (int i = 0; i < kMoments; ++i) {
-      const uint32_t bits = uint32_t(p[i]) << 16;
-      std::memcpy(&m[i], &bits, sizeof bits);
+        &sub_moments_[((size_t(slot) * kSub * kSub + size_t(sub)) * kThetaBins * kPhiBins + size_t(node)) * stride];
+    auto unpack = [](uint16_t v) {
+      const uint32_t bits = uint32_t(v) << 16;
+      float f;
+      std::memcpy(&f, &bits, sizeof f);
+      return f;
+    };
+    if (!one_colour_) {
+      for (int i = 0; i < kMoments; ++i) m[i] = unpack(p[i]);
+      return;
     }
+    for (int i = 0; i < kSubLinear1; ++i) m[i] = unpack(p[i]);
+    for (int i = 0; i < 3; ++i) m[kTangent + i] = unpack(p[kSubLinear1 + i]);
   }
   // The sub-cells a box touches and their overlap areas: calls
-  // visit(row k, column c, sub-cell index, area) for each.
+  // visit(row k, column c, the cell's index in class_of_ (knit_cell_index),
+  // sub-cell index, area) for each.
   template <class Visit>
   static void for_each_sub(const k::KnitGeom& g, float x, float y, float ex, float ey, Visit&& visit);
   // Fills a from `points`, the box's p_delta, its summed moments `sum`
@@ -206,8 +223,9 @@ class FootprintTable {
   std::array<int, kClasses> slot_{};  // index into moments_ blocks, -1 when the class is absent
   int slots_ = 0;                     // classes present
   std::vector<float> moments_;       // [slot][theta][phi][kMoments]
-  // [slot][sub-cell][theta][phi][kMoments], sub-cell = sy * kSub + sx, as
-  // bfloat16 (a float's upper half, rounded to nearest: 8 significant bits,
+  // [slot][sub-cell][theta][phi][kMoments, or kSubStride1 with one colour
+  // index: the neighbour shares only serve the colours], sub-cell =
+  // sy * kSub + sx, as bfloat16 (a float's upper half, rounded to nearest: 8 significant bits,
   // 0.4% at most, where the statistics' own sampling error is several
   // percent; half the memory of float16's range checks for a shift).
   std::vector<uint16_t> sub_moments_;
