@@ -223,18 +223,19 @@ KnitMaterial::Route KnitMaterial::route(const BaseHit& hit, Vec3& fx, Vec3& fy, 
   e = k::knit_footprint_extent(surface_.geom(), fx, fy);
   // A cell or more in both directions (knit_footprint_stratified's test).
   if (e.x >= 1.0f && e.y >= 1.0f) return table_ ? Route::Cells : Route::Marched;
-  if (table_ && table_->has_sub_cells() && e.x >= params_.table_min_cells && e.y >= params_.table_min_cells &&
-      FootprintTable::sub_box(params_.uv_scale * hit.u, params_.uv_scale * hit.v, e.x, e.y, surface_.geom()))
-    return Route::SubCells;
+  if (sub_cells_serve(params_.uv_scale * hit.u, params_.uv_scale * hit.v, e)) return Route::SubCells;
   return params_.near_field_below_cell ? Route::NearField : Route::Marched;
+}
+
+bool KnitMaterial::sub_cells_serve(float x, float y, Vec3 e) const {
+  return table_ && table_->has_sub_cells() && e.x >= params_.table_min_cells && e.y >= params_.table_min_cells &&
+         FootprintTable::sub_box(x, y, e.x, e.y, surface_.geom());
 }
 
 bool KnitMaterial::table_serves(float x, float y, Vec3 fx, Vec3 fy) const {
   if (!table_) return false;
   const Vec3 e = k::knit_footprint_extent(surface_.geom(), fx, fy);
-  if (e.x >= 1.0f && e.y >= 1.0f) return true;
-  return table_->has_sub_cells() && e.x >= params_.table_min_cells && e.y >= params_.table_min_cells &&
-         FootprintTable::sub_box(x, y, e.x, e.y, surface_.geom());
+  return (e.x >= 1.0f && e.y >= 1.0f) || sub_cells_serve(x, y, e);
 }
 
 bool KnitMaterial::near_field_at(const BaseHit& hit) const {

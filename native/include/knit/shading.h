@@ -172,6 +172,9 @@ class KnitMaterial {
   // the multi-scale routes.
   enum class Route { NearField, Cells, SubCells, Marched };
   Route route(const BaseHit& hit, Vec3& fx, Vec3& fy, Vec3& extent) const;
+  // Whether the class table's sub-cells serve a footprint of `extent`
+  // cells (below a cell in some direction) at pattern point (x, y).
+  bool sub_cells_serve(float x, float y, Vec3 extent) const;
   void set_colors(KnitShade& sh, int color_index) const;
   // Palette mixed by a footprint's colour histogram (KNIT_MS_COLORS bins).
   void mix_colors(KnitShade& sh, const float* weights) const;
