@@ -437,7 +437,7 @@ inline bool FootprintTable::finish(k::KnitAggregate& a, int points, float p_delt
   a.points = points;
   a.p_delta = p_delta;
   const float hit = 1 - a.p_delta;  // the hit fraction over the box
-  a.hits = hit > 0 ? std::max(1, int(std::lround(hit * float(a.points)))) : 0;
+  a.hits = hit > 0 ? std::max(1, round_count(hit * float(a.points))) : 0;
   a.steps = 0;
   a.color_pick = -1;
   if (!(hit > 0 && sum[kHit] > 0)) {

@@ -297,7 +297,7 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     }
     sh.pass_through = false;
     sh.point.p_delta = a.p_delta;
-    sh.point.layers = std::max(1, int(std::lround(a.layers)));
+    sh.point.layers = std::max(1, round_count(a.layers));
     sh.point.shadow = mean_shadow_;
     // Body colour: the palette mixed by the footprint's colour histogram, or
     // (more colours than the histogram has bins) the colour of one hit.

@@ -58,6 +58,11 @@ inline float atan2_approx(float y, float x) {
   return y < 0 ? -r : r;
 }
 
+// std::lround for a count or mean that is >= 0 and far below 2^31: the
+// same value (in double, v + 0.5 is exact and truncation is the floor),
+// without libm's call (0.5% of a multi-scale render's instructions).
+inline int round_count(float v) { return int(double(v) + 0.5); }
+
 class FootprintTable {
  public:
   static constexpr int kThetaBins = 24;  // nodes i pi / 23 over [0, pi] (both sides; none at the horizon)
