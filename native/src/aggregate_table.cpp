@@ -8,6 +8,7 @@
 #include <cstring>
 #include <random>
 #include <stdexcept>
+#include <string>
 #include <type_traits>
 #include <utility>
 
@@ -46,13 +47,6 @@ inline void add_scaled(float* s, const float* m, float w) {
 }  // namespace
 
 namespace {
-
-inline float bf16_to_float(uint16_t v) {
-  const uint32_t bits = uint32_t(v) << 16;
-  float f;
-  std::memcpy(&f, &bits, sizeof f);
-  return f;
-}
 
 // A float's bfloat16: its upper 16 bits, rounded to nearest (ties to even);
 // the statistics are finite.
@@ -648,23 +642,15 @@ void FootprintTable::for_each_sub(const k::KnitGeom& g, float x, float y, float 
 
 k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, float x, float y, float ex, float ey,
                                                Vec3 wi, float pick) const {
-  if (!has_sub_cells()) throw std::logic_error("FootprintTable::aggregate_sub: the table has no sub-cells");
   const k::KnitGeom& g = surface.geom();
-  if (!sub_box(x, y, ex, ey, g)) throw std::invalid_argument("FootprintTable::aggregate_sub: not a sub-cell box");
+  // The overlap areas summed per class and sub-cell: one weighted sum of
+  // moments per pair present, however many cells the box touches.
+  const SubAreas sa = sub_areas(g, x, y, ex, ey, "aggregate_sub");
+  const std::array<double, kClasses * kSub * kSub>& area = sa.area;
+  const double total = sa.total;
   k::KnitAggregate a{};
   const DirWeights dw = dir_weights(wi);
   constexpr int kSubCells = kSub * kSub;
-  // The overlap areas summed per class and sub-cell: one weighted sum of
-  // moments per pair present, however many cells the box touches.
-  std::array<double, kClasses * kSubCells> area{};
-  double total = 0;
-  int touched = 0;
-  for_each_sub(g, x, y, ex, ey, [&](int, int, size_t cell, int sub, double w) {
-    const int slot = slot_[class_of_[cell]];
-    area[size_t(slot * kSubCells + sub)] += w;
-    total += w;
-    ++touched;
-  });
   std::array<float, kLinear> sum{};
   Vec3 tsum = k::kv3(0, 0, 0);
   std::array<float, kClasses * kSubCells> hit_of{};  // hit fraction per pair, for the colours
@@ -684,8 +670,8 @@ k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, float
         const float w = share * dw.w[size_t(q)];
         const uint16_t* p = pair + size_t(dw.node[size_t(q)]) * kStride;
         float m[kLin], t[3];
-        for (int i = 0; i < kLin; ++i) m[i] = bf16_to_float(p[i]);
-        for (int i = 0; i < 3; ++i) t[i] = bf16_to_float(p[kTan + i]);
+        for (int i = 0; i < kLin; ++i) m[i] = from_bf16(p[i]);
+        for (int i = 0; i < 3; ++i) t[i] = from_bf16(p[kTan + i]);
         h += dw.w[size_t(q)] * m[kHit];
         add_scaled<kLin>(sum.data(), m, w);
         tsum = add_line(tsum, k::kv3_scale(k::kv3(t[0], t[1], t[2]), w));
@@ -702,7 +688,7 @@ k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, float
       sum_pairs(std::integral_constant<int, kMoments>{}, std::integral_constant<int, kLinear>{},
                 std::integral_constant<int, kTangent>{});
   }
-  if (!finish(a, touched, std::clamp(float(1 - hits), 0.0f, 1.0f), sum.data(), tsum, x, y)) return a;
+  if (!finish(a, sa.touched, std::clamp(float(1 - hits), 0.0f, 1.0f), sum.data(), tsum, x, y)) return a;
   if (one_colour_) {
     a.color_w[0] = 1;
     a.color_pick = 0;
@@ -762,31 +748,35 @@ k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, float
 
 float FootprintTable::p_delta_sub(const KnitSurface& surface, float x, float y, float ex, float ey,
                                   Vec3 wi) const {
-  if (!has_sub_cells()) throw std::logic_error("FootprintTable::p_delta_sub: the table has no sub-cells");
-  const k::KnitGeom& g = surface.geom();
-  if (!sub_box(x, y, ex, ey, g)) throw std::invalid_argument("FootprintTable::p_delta_sub: not a sub-cell box");
+  const SubAreas sa = sub_areas(surface.geom(), x, y, ex, ey, "p_delta_sub");
+  if (!(sa.total > 0)) return 1;
   const DirWeights dw = dir_weights(wi);
-  constexpr int kSubCells = kSub * kSub;
-  std::array<double, kClasses * kSubCells> area{};
-  double total = 0;
-  for_each_sub(g, x, y, ex, ey, [&](int, int, size_t cell, int sub, double w) {
-    area[size_t(slot_[class_of_[cell]] * kSubCells + sub)] += w;
-    total += w;
-  });
-  if (!(total > 0)) return 1;
   double hits = 0;
-  for (int ps = 0; ps < slots_ * kSubCells; ++ps) {
-    if (!(area[size_t(ps)] > 0)) continue;
-    const float share = float(area[size_t(ps)] / total);
-    float h = 0;
-    for (int q = 0; q < 4; ++q) {
-      float m[kMoments];
-      sub_node(ps / kSubCells, ps % kSubCells, dw.node[size_t(q)], m);
-      h += dw.w[size_t(q)] * m[kHit];
-    }
-    hits += double(share) * double(std::clamp(h, 0.0f, 1.0f));
-  }
+  for (int ps = 0; ps < slots_ * kSub * kSub; ++ps)
+    if (sa.area[size_t(ps)] > 0)
+      hits += double(float(sa.area[size_t(ps)] / sa.total)) * double(sub_hit_fraction(ps, dw));
   return std::clamp(float(1 - hits), 0.0f, 1.0f);
+}
+
+FootprintTable::SubAreas FootprintTable::sub_areas(const k::KnitGeom& g, float x, float y, float ex, float ey,
+                                                   const char* caller) const {
+  if (!has_sub_cells())
+    throw std::logic_error(std::string("FootprintTable::") + caller + ": the table has no sub-cells");
+  if (!sub_box(x, y, ex, ey, g))
+    throw std::invalid_argument(std::string("FootprintTable::") + caller + ": not a sub-cell box");
+  SubAreas sa;
+  for_each_sub(g, x, y, ex, ey, [&](int, int, size_t cell, int sub, double w) {
+    sa.area[size_t(slot_[class_of_[cell]] * kSub * kSub + sub)] += w;
+    sa.total += w;
+    ++sa.touched;
+  });
+  return sa;
+}
+
+float FootprintTable::sub_hit_fraction(int pair, const DirWeights& d) const {
+  float h = 0;
+  for (int q = 0; q < 4; ++q) h += d.w[size_t(q)] * from_bf16(sub_node_at(pair, d.node[size_t(q)])[kHit]);
+  return std::clamp(h, 0.0f, 1.0f);
 }
 
 }  // namespace knit

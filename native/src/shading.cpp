@@ -271,8 +271,9 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
   Vec3 fx, fy, e;
   const Route rt = route(hit, fx, fy, e);
   if (rt != Route::NearField) {
-    const int points = footprint_points_for(fx, fy);
     k::KnitAggregate a;
+    // (the points only for the whole cells' and the marched footprints)
+    const int points = rt == Route::SubCells ? 0 : footprint_points_for(fx, fy);
     if (rt == Route::SubCells) {
       a = table_->aggregate_sub(surface_, x, y, e.x, e.y, wi, shift[0]);  // flat-base, as below
       sh.from_table = true;

@@ -176,23 +176,39 @@ class FootprintTable {
   // (kMoments floats; with one colour index the neighbour shares, which
   // are not kept, read as zeros).
   void sub_node(int slot, int sub, int node, float* m) const {
-    const size_t stride = one_colour_ ? size_t(kSubStride1) : size_t(kMoments);
-    const uint16_t* p =
-        &sub_moments_[((size_t(slot) * kSub * kSub + size_t(sub)) * kThetaBins * kPhiBins + size_t(node)) * stride];
-    auto unpack = [](uint16_t v) {
-      const uint32_t bits = uint32_t(v) << 16;
-      float f;
-      std::memcpy(&f, &bits, sizeof f);
-      return f;
-    };
+    const uint16_t* p = sub_node_at(slot * kSub * kSub + sub, node);
     if (!one_colour_) {
-      for (int i = 0; i < kMoments; ++i) m[i] = unpack(p[i]);
+      for (int i = 0; i < kMoments; ++i) m[i] = from_bf16(p[i]);
       return;
     }
     for (int i = 0; i < kMoments; ++i) m[i] = 0.0f;
-    for (int i = 0; i < kSubLinear1; ++i) m[i] = unpack(p[i]);
-    for (int i = 0; i < 3; ++i) m[kTangent + i] = unpack(p[kSubLinear1 + i]);
+    for (int i = 0; i < kSubLinear1; ++i) m[i] = from_bf16(p[i]);
+    for (int i = 0; i < 3; ++i) m[kTangent + i] = from_bf16(p[kSubLinear1 + i]);
   }
+  // The stored node `node` of (class slot, sub-cell) pair `pair` (slot *
+  // kSub^2 + sub-cell), and a stored value read back as a float.
+  const uint16_t* sub_node_at(int pair, int node) const {
+    const size_t stride = one_colour_ ? size_t(kSubStride1) : size_t(kMoments);
+    return &sub_moments_[(size_t(pair) * kThetaBins * kPhiBins + size_t(node)) * stride];
+  }
+  static float from_bf16(uint16_t v) {
+    const uint32_t bits = uint32_t(v) << 16;
+    float f;
+    std::memcpy(&f, &bits, sizeof f);
+    return f;
+  }
+  // The overlap areas of a box (see aggregate_sub) summed per (class slot,
+  // sub-cell) pair, their total and the sub-cells touched; throws for a
+  // table without sub-cells or a box outside their domain, naming `caller`.
+  struct SubAreas {
+    std::array<double, kClasses * kSub * kSub> area{};
+    double total = 0;
+    int touched = 0;
+  };
+  SubAreas sub_areas(const k::KnitGeom& g, float x, float y, float ex, float ey, const char* caller) const;
+  // The hit fraction of pair `pair` in direction d (bilinear, clamped), as
+  // aggregate_sub sums it.
+  float sub_hit_fraction(int pair, const DirWeights& d) const;
   // The sub-cells a box touches and their overlap areas: calls
   // visit(row k, column c, the cell's index in class_of_ (knit_cell_index),
   // sub-cell index, area) for each.
