@@ -21,6 +21,41 @@ namespace {
 using namespace knit;
 using namespace knit::test;
 
+// The explicit tubes' first hit of the ray seen along wi through pattern
+// point (x, y): from in front, from (x, y, top) into the shell; from behind,
+// from the shell's bottom to (x, y, top).
+TubeHit tubes_along(const GroundTruthScene& sc, double x, double y, const D3& wi) {
+  D3 o, d;
+  sc.entry_ray(x, y, wi, o, d);
+  double tmax = sc.shell_exit(o, d);
+  if (d[2] > 0) {  // from behind: the ray crossed the shell from its bottom to (x, y, top)
+    tmax = 2 * sc.surface.shell_top() / d[2];
+    o = add(o, mul(d, -tmax));
+  }
+  return sc.tubes.intersect(o, d, 0, tmax);
+}
+
+// The marched aggregate over the square footprint of side `size` at (x, y),
+// 16 shifts of 64 points: its share of colour index 1 and its mean layer
+// count (hit-weighted), and its hits.
+struct MarchedMix {
+  double c1 = 0, layers = 0, hits = 0;
+};
+MarchedMix marched_mix(const KnitSurface& s, float x, float y, float size, k::kvec3 wi, std::mt19937& rng,
+                       std::uniform_real_distribution<float>& U) {
+  MarchedMix mm;
+  for (int i = 0; i < 16; ++i) {
+    const k::KnitAggregate m = k::knit_aggregate(s.geom(), s.codes(), s.colors(), x, y, k::kv3(size, 0, 0),
+                                                 k::kv3(0, size, 0), wi, 64, U(rng), U(rng), 0, 0, 6.2832f, 32);
+    mm.c1 += m.color_w[1] * m.hits;
+    mm.layers += m.layers * m.hits;
+    mm.hits += m.hits;
+  }
+  mm.c1 /= mm.hits;
+  mm.layers /= mm.hits;
+  return mm;
+}
+
 double angle_between(const D3& a, const D3& b) {
   const double d = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) /
                    std::sqrt((a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) * (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]));
@@ -100,15 +135,7 @@ TEST(FootprintTable, MatchesExplicitTubesOverFootprint) {
       const double side = wi[2] < 0 ? -1 : 1;
       for (int i = 0; i < G; ++i)
         for (int j = 0; j < G; ++j) {
-          const double x = x0 + w * (i + 0.5) / G, y = y0 + h * (j + 0.5) / G;
-          D3 o, d;
-          sc.entry_ray(x, y, wi, o, d);
-          double tmax = sc.shell_exit(o, d);
-          if (d[2] > 0) {  // from behind: the ray crossed the shell from its bottom to (x, y, top)
-            tmax = 2 * sc.surface.shell_top() / d[2];
-            o = add(o, mul(d, -tmax));
-          }
-          const TubeHit th_ = sc.tubes.intersect(o, d, 0, tmax);
+          const TubeHit th_ = tubes_along(sc, x0 + w * (i + 0.5) / G, y0 + h * (j + 0.5) / G, wi);
           ++n;
           if (!th_.hit) {
             ++through;
@@ -312,17 +339,8 @@ TEST(FootprintTable, ColourHistogramFollowsTheCells) {
     const k::kvec3 wi = k::kv3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
     const k::KFootprint f = k::knit_footprint(s.geom(), x, y, k::kv3(size, 0, 0), k::kv3(0, size, 0), 64, 0.5f, 0.5f);
     const k::KnitAggregate t = table.aggregate(s, f, wi);
-    double c1 = 0, layers = 0, hits = 0;
-    const int shifts = 16;
-    for (int i = 0; i < shifts; ++i) {
-      const k::KnitAggregate m = k::knit_aggregate(s.geom(), s.codes(), s.colors(), x, y, k::kv3(size, 0, 0),
-                                                   k::kv3(0, size, 0), wi, 64, U(rng), U(rng), 0, 0, 6.2832f, 32);
-      c1 += m.color_w[1] * m.hits;
-      layers += m.layers * m.hits;
-      hits += m.hits;
-    }
-    c1 /= hits;
-    layers /= hits;
+    const MarchedMix mm = marched_mix(s, x, y, size, wi, rng, U);
+    const double c1 = mm.c1, layers = mm.layers;
     worst_c = std::max(worst_c, std::abs(t.color_w[1] - c1));
     worst_l = std::max(worst_l, std::abs(t.layers - layers));
     EXPECT_NEAR(t.color_w[0] + t.color_w[1], 1.0, 1e-4);
@@ -352,17 +370,9 @@ TEST(FootprintTable, SubCellColoursFollowTheCells) {
     const float ex = size / cw, ey = size / ch;
     if (!FootprintTable::sub_box(x, y, ex, ey, s.geom())) continue;
     const k::KnitAggregate t = table.aggregate_sub(s, x, y, ex, ey, wi);
-    double c1 = 0, layers = 0, hits = 0;
-    for (int i = 0; i < 16; ++i) {
-      const k::KnitAggregate m = k::knit_aggregate(s.geom(), s.codes(), s.colors(), x, y, k::kv3(size, 0, 0),
-                                                   k::kv3(0, size, 0), wi, 64, U(rng), U(rng), 0, 0, 6.2832f, 32);
-      c1 += m.color_w[1] * m.hits;
-      layers += m.layers * m.hits;
-      hits += m.hits;
-    }
-    if (!(hits > 0) || t.hits == 0) continue;
-    c1 /= hits;
-    layers /= hits;
+    const MarchedMix mm = marched_mix(s, x, y, size, wi, rng, U);
+    if (!(mm.hits > 0) || t.hits == 0) continue;
+    const double c1 = mm.c1, layers = mm.layers;
     if (c1 > 0.05 && c1 < 0.95) ++mixed;
     worst_c = std::max(worst_c, std::abs(t.color_w[1] - c1));
     worst_l = std::max(worst_l, std::abs(t.layers - layers));
@@ -607,14 +617,7 @@ TEST(FootprintTable, SubCellsMatchExplicitTubes) {
         D3 nsum = {0, 0, 0};
         for (int i = 0; i < G; ++i)
           for (int j = 0; j < G; ++j) {
-            D3 o, d;
-            sc.entry_ray(x0 + bw * (i + 0.5) / G, y0 + bh * (j + 0.5) / G, wi, o, d);
-            double tmax = sc.shell_exit(o, d);
-            if (d[2] > 0) {  // from behind, as in MatchesExplicitTubesOverFootprint
-              tmax = 2 * sc.surface.shell_top() / d[2];
-              o = add(o, mul(d, -tmax));
-            }
-            const TubeHit h = sc.tubes.intersect(o, d, 0, tmax);
+            const TubeHit h = tubes_along(sc, x0 + bw * (i + 0.5) / G, y0 + bh * (j + 0.5) / G, wi);
             if (!h.hit) {
               ++through;
               continue;

@@ -266,6 +266,22 @@ KnitMaterialParams tube_params() {
   mp.ply_detail = false;
   return mp;
 }
+// Whether the model's yarn point and the explicit tubes' hit are the same
+// point (else a comparison from them is of different paths).
+bool same_yarn_point(const ViewSample& v, double r) {
+  const Vec3& p = v.sh.p_yarn;
+  return norm(sub(D3{p.x, p.y, p.z}, v.gt.p)) <= 0.02 * r;
+}
+// A direction uniform over the sphere.
+D3 sphere_direction(std::mt19937& rng) {
+  std::uniform_real_distribution<double> U(0, 1);
+  const double lz = 2 * U(rng) - 1, lp = 6.283 * U(rng), ls = std::sqrt(1 - lz * lz);
+  return {ls * std::cos(lp), ls * std::sin(lp), lz};
+}
+// Distance from p along unit L to the shell's surface |z| = top.
+double to_shell_surface(const D3& p, const D3& L, double top) {
+  return L[2] > 0 ? (top - p[2]) / L[2] : (p[2] + top) / -L[2];
+}
 
 TEST(Shading, PathsFromAYarnHitMeetOtherYarnAsExplicitTubesDo) {
   for (const NamedPattern& np : shadow_patterns()) {
@@ -273,7 +289,6 @@ TEST(Shading, PathsFromAYarnHitMeetOtherYarnAsExplicitTubesDo) {
     KnitMaterial m(np.pattern, tube_params());
     const double r = sc.surface.params().r, top = sc.surface.shell_top();
     std::mt19937 rng(7);
-    std::uniform_real_distribution<double> U(0, 1);
     int n = 0, agree = 0, occluded = 0, both = 0;
     double pos_err = 0;
     for (int i = 0; i < 3000 && n < 800; ++i) {
@@ -283,13 +298,11 @@ TEST(Shading, PathsFromAYarnHitMeetOtherYarnAsExplicitTubesDo) {
       const KnitShade& sh = v.sh;
       if (!gt.hit || sh.pass_through) continue;
       ASSERT_TRUE(sh.in_shell);
-      // The same point on both (else the comparison below is of different paths).
-      if (norm(sub(D3{sh.p_yarn.x, sh.p_yarn.y, sh.p_yarn.z}, gt.p)) > 0.02 * r) continue;
+      if (!same_yarn_point(v, r)) continue;
       // A direction leaving the tube's surface, over the whole sphere otherwise.
-      const double lz = 2 * U(rng) - 1, lp = 6.283 * U(rng), ls = std::sqrt(1 - lz * lz);
-      const D3 L = {ls * std::cos(lp), ls * std::sin(lp), lz};
+      const D3 L = sphere_direction(rng);
       if (dot(L, gt.normal) < 0.1) continue;
-      const double t_exit = L[2] > 0 ? (top - gt.p[2]) / L[2] : (gt.p[2] + top) / -L[2];
+      const double t_exit = to_shell_surface(gt.p, L, top);
       const TubeHit g2 = sc.tubes.intersect(gt.p, L, 0.05 * r, t_exit);
       // Skip the paths that graze a tube (the truth flips under a 3% r move).
       const TubeHit g3 = sc.tubes.intersect(add(gt.p, mul(gt.normal, 0.03 * r)), L, 0.05 * r, t_exit);
@@ -339,25 +352,25 @@ TEST(Shading, PathsThroughTheHitYarnMeetOtherYarnAsExplicitTubesDo) {
     KnitMaterial m(np.pattern, tube_params());
     const double r = sc.surface.params().r, top = sc.surface.shell_top();
     std::mt19937 rng(11);
-    std::uniform_real_distribution<double> U(0, 1);
     int n = 0, agree = 0, occluded = 0;
     for (int i = 0; i < 6000 && n < 600; ++i) {
       const ViewSample v = view_sample(sc, m, rng, 1.2);
       const TubeHit& gt = v.gt;
       if (!gt.hit || v.sh.pass_through) continue;
-      if (norm(sub(D3{v.sh.p_yarn.x, v.sh.p_yarn.y, v.sh.p_yarn.z}, gt.p)) > 0.02 * r) continue;
-      const double lz = 2 * U(rng) - 1, lp = 6.283 * U(rng), ls = std::sqrt(1 - lz * lz);
-      const D3 L = {ls * std::cos(lp), ls * std::sin(lp), lz};
+      if (!same_yarn_point(v, r)) continue;
+      const D3 L = sphere_direction(rng);
       if (dot(L, gt.normal) > -0.1 || std::fabs(L[2]) < 0.05) continue;  // into the tube, not along the shell
-      const double t_exit = L[2] > 0 ? (top - gt.p[2]) / L[2] : (gt.p[2] + top) / -L[2];
-      double te = 0.05 * r;  // out of the tubes holding the start, in steps of 0.002
-      while (te < t_exit && sc.tubes.inside(add(gt.p, mul(L, te)))) te += 0.002;
-      const bool truth = te < t_exit && sc.tubes.intersect(gt.p, L, te + 1e-6, t_exit).hit;
+      const double t_exit = to_shell_surface(gt.p, L, top);
+      // From o along L: out of the tubes holding o (in steps of 0.002),
+      // then a tube met before the shell's surface or not.
+      const auto meets_yarn = [&](const D3& o) {
+        double te = 0.05 * r;
+        while (te < t_exit && sc.tubes.inside(add(o, mul(L, te)))) te += 0.002;
+        return te < t_exit && sc.tubes.intersect(o, L, te + 1e-6, t_exit).hit;
+      };
+      const bool truth = meets_yarn(gt.p);
       // Skip the paths that graze a tube (the truth flips under a 3% r move).
-      const D3 p3 = add(gt.p, mul(gt.normal, -0.03 * r));
-      double te3 = 0.05 * r;
-      while (te3 < t_exit && sc.tubes.inside(add(p3, mul(L, te3)))) te3 += 0.002;
-      if (truth != (te3 < t_exit && sc.tubes.intersect(p3, L, te3 + 1e-6, t_exit).hit)) continue;
+      if (truth != meets_yarn(add(gt.p, mul(gt.normal, -0.03 * r)))) continue;
       ++n;
       const bool occ = m.occluded_from(v.bh, v.sh, k::kv3(float(L[0]), float(L[1]), float(L[2])), nullptr);
       occluded += truth;
