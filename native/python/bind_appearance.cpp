@@ -544,7 +544,7 @@ const char* mode_name(KnitMode m) {
 KnitMaterial make_material(const Pattern& pattern, const StitchParams& stitch, ::py::object bsdf,
                            ::py::object ply, const std::string& mode, bool capm, bool ply_detail,
                            int footprint_points, bool footprint_table, double table_min_cells,
-                           bool self_shadowing, bool near_field_below_cell, double uv_scale,
+                           bool table_bsdf, bool self_shadowing, bool near_field_below_cell, double uv_scale,
                            int max_steps, double max_segment, double max_bend) {
   KnitMaterialParams mp;
   mp.stitch = stitch;
@@ -584,6 +584,7 @@ KnitMaterial make_material(const Pattern& pattern, const StitchParams& stitch, :
   mp.footprint_points = footprint_points;
   mp.footprint_table = footprint_table;
   mp.table_min_cells = float(table_min_cells);
+  mp.table_bsdf = table_bsdf;
   mp.self_shadowing = self_shadowing;
   mp.near_field_below_cell = near_field_below_cell;
   mp.uv_scale = float(uv_scale);
@@ -1086,7 +1087,7 @@ return the shading point (knit/shading.h).
 
 KnitMaterial(pattern, stitch=StitchParams(), bsdf=None, ply=None,
 mode='near_field', capm=True, ply_detail=True, footprint_points=4,
-footprint_table=True, table_min_cells=0.5, self_shadowing=True,
+footprint_table=True, table_min_cells=0.5, table_bsdf=True, self_shadowing=True,
 near_field_below_cell=True, uv_scale=40.0, max_steps=32, max_segment=6.2832,
 max_bend=0.05)
 
@@ -1099,7 +1100,11 @@ stitch cell or more are aggregated from a per-class table built here
 (docs/multiscale.md) instead of CAPM marches (not for patterns with slip
 stitches). table_min_cells, in [0.5, 1]: the smallest footprint, in
 stitch cells in both directions, the table serves; below a cell it reads
-the table's sub-cell statistics. self_shadowing: near field, light and bounced rays from a yarn
+the table's sub-cell statistics. table_bsdf: the table's footprints are
+shaded with a tabulated BSDF built with it (the near field's shading and
+self-shadowing averaged per class and pair of directions); False: the yarn
+BSDF at the footprint's mean normal with LEAN-widened lobes and no
+self-shadowing. self_shadowing: near field, light and bounced rays from a yarn
 hit cross the rest of the yarn shell (KnitMaterial.occluded_from,
 shade_from) before they leave it. near_field_below_cell: a multi-scale
 footprint below a stitch cell in either direction is shaded as the near
@@ -1113,6 +1118,7 @@ max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
            ::py::arg("mode") = "near_field", ::py::arg("capm") = true,
            ::py::arg("ply_detail") = true, ::py::arg("footprint_points") = 4,
            ::py::arg("footprint_table") = true, ::py::arg("table_min_cells") = 0.5,
+           ::py::arg("table_bsdf") = true,
            ::py::arg("self_shadowing") = true,
            ::py::arg("near_field_below_cell") = true, ::py::arg("uv_scale") = 40.0, ::py::arg("max_steps") = 32,
            ::py::arg("max_segment") = 6.2832, ::py::arg("max_bend") = 0.05)
@@ -1136,6 +1142,7 @@ max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
                              [](const KnitMaterial& km) { return km.params().footprint_table; })
       .def_property_readonly("table_min_cells",
                              [](const KnitMaterial& km) { return km.params().table_min_cells; })
+      .def_property_readonly("table_bsdf", [](const KnitMaterial& km) { return km.params().table_bsdf; })
       .def_property_readonly("self_shadowing",
                              [](const KnitMaterial& km) { return km.params().self_shadowing; })
       .def_property_readonly("near_field_below_cell",

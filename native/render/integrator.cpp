@@ -223,8 +223,11 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
       if (!(q > 0) || sampler.get1d() >= q) break;
       beta = beta / q;
     }
-    if (resolves && m.bounce_inside(si, wi)) {
-      // Met yarn again inside the shell: that is the next vertex.
+    // Met yarn again inside the shell (the near field's march, or the class
+    // table's shadowed share): that is the next vertex.
+    const bool again = bs.internal ? m.bounce_table(si, wi) : resolves && m.bounce_inside(si, wi);
+    if (bs.internal && !again) break;
+    if (again) {
       ray.o = si.p;
       ray.d = wi;
       ray.has_differentials = false;

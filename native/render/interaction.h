@@ -2,6 +2,7 @@
 #pragma once
 
 #include "knit/kernel.h"
+#include "knit/table_bsdf.h"
 #include "render/vec.h"
 
 namespace knit::render {
@@ -23,6 +24,11 @@ struct YarnShading {
   bool from_back = false;
   knit::k::kvec3 shell_p{};
   Frame base;
+  // The knit model's class table with its tabulated BSDF: shaded with it
+  // (in si.shading, the base's frame) instead of bsdf's lobes; bsdf holds
+  // the body colours.
+  const knit::TableBsdf* table = nullptr;
+  knit::TableBsdf::Mix mix;
 };
 
 // Screen-space footprint of a hit (ray differentials, Igehy 1999): how the

@@ -46,6 +46,9 @@ struct BsdfSample {
   float pdf = 0;     // solid angle; for delta lobes the discrete probability of the lobe
   uint32_t flags = 0;
   float eta = 1;     // relative IOR crossed by a transmission (for ray differentials)
+  // The knit model's class table: wi meets other yarn of the same footprint
+  // first, where the path scatters again (Material::bounce_table).
+  bool internal = false;
   bool is_delta() const { return (flags & kSpecular) != 0; }
 };
 
@@ -75,6 +78,10 @@ class Material {
   // hit was found on (the knit model's yarn shell); shadow rays towards a
   // light start beyond that surface.
   virtual Rgb self_transmittance(const SurfaceInteraction&, Vec3 /*w*/) const { return Rgb(1.0f); }
+  // A sample with `internal` set (the knit model's class table): wi (world)
+  // meets other yarn of the same footprint; si becomes that scattering
+  // point, seen from -wi. False when the material has no such samples.
+  virtual bool bounce_table(SurfaceInteraction&, Vec3 /*wi*/) const { return false; }
   // A bounce of a resolved hit that stays inside it: when the ray leaving si
   // along wi (world) meets the same material again before leaving the
   // surface's shell, si becomes that hit (shading set, as resolve does) and

@@ -187,6 +187,8 @@ void KnitModelMaterial::apply_shade(SurfaceInteraction& si, const knit::KnitShad
   si.shading = Frame::from_normal_tangent(n / ln, from_kvec(sh.st));
   si.yarn.active = true;
   si.yarn.bsdf = model.kernel_bsdf(sh);
+  si.yarn.table = sh.table_bsdf;
+  if (sh.table_bsdf) si.yarn.mix = sh.mix;
   si.yarn.in_shell = sh.in_shell;
   si.yarn.from_back = sh.from_back;
   si.yarn.shell_p = sh.p_yarn;
@@ -233,6 +235,14 @@ Rgb KnitModelMaterial::self_transmittance(const SurfaceInteraction& si, Vec3 w) 
   if (!si.yarn.in_shell) return Rgb(1.0f);
   return near_model().occluded_from(shell_base_hit(si), shell_shade(si), to_kvec(w), frame_.get()) ? Rgb()
                                                                                                    : Rgb(1.0f);
+}
+
+bool KnitModelMaterial::bounce_table(SurfaceInteraction& si, Vec3 wi) const {
+  // The yarn met inside the footprint is taken as yarn of the same classes
+  // seen from -wi: the table's mix for that view, at the same point.
+  if (!si.yarn.table) return false;
+  si.yarn.table->remix(si.yarn.mix, to_kvec(si.shading.to_local(-wi)));
+  return si.yarn.mix.n > 0;
 }
 
 bool KnitModelMaterial::bounce_inside(SurfaceInteraction& si, Vec3 wi) const {

@@ -21,7 +21,8 @@ class YarnShadedMaterial : public Material {
   // f(wo, wi) without the cosine (the kernel's eval includes it).
   Rgb eval(const SurfaceInteraction& si, Vec3 wo, Vec3 wi) const override;
   float pdf(const SurfaceInteraction& si, Vec3 wo, Vec3 wi) const override;
-  // Uses u (lobe choice and direction); uc is not needed.
+  // The yarn BSDF uses u (lobe choice and direction); the class table's
+  // tabulated BSDF uses uc too (its cell, then the direction in it).
   bool sample(const SurfaceInteraction& si, Vec3 wo, float uc, Vec2 u, BsdfSample& s) const override;
 };
 

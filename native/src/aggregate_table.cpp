@@ -76,14 +76,13 @@ int FootprintTable::cell_class(const KnitSurface& surface, int k, int c) {
   return (cl.code == KNIT_CODE_PURL ? 4 : 0) + (cl.sg.x < 0 ? 2 : 0) + (cl.sg.z < 0 ? 1 : 0);
 }
 
-FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& capm, int rays_per_direction,
-                               LayerCounts layer_counts, bool sub_cells) {
+FootprintTable::ClassCells FootprintTable::class_cells(const KnitSurface& surface) {
   const k::KnitGeom& g = surface.geom();
-  // The cells of each class; for large patterns a uniform sample of at most
-  // kMaxCells of them (reservoir sampling, fixed seed), enough for the rays
-  // of one direction and bounded in memory for a 4096 x 4096 pattern.
+  // For large patterns a uniform sample of at most kMaxCells of them
+  // (reservoir sampling, fixed seed), enough for the rays of one direction
+  // and bounded in memory for a 4096 x 4096 pattern.
   constexpr size_t kMaxCells = 1024;
-  std::array<std::vector<std::pair<int, int>>, kClasses> cells;
+  ClassCells cells;
   std::array<size_t, kClasses> seen{};
   std::mt19937 rng(12345);
   for (int k = 0; k < g.rows; ++k)
@@ -97,6 +96,24 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
         if (j < kMaxCells) cells[cls][j] = {k, c};
       }
     }
+  return cells;
+}
+
+Vec3 FootprintTable::ray_origin(const k::KnitGeom& g, const std::pair<int, int>& cell, int node, int rays, int m,
+                                int* sub) {
+  // The point inside the cell from a (0,2)-net: each run of 4^j of its
+  // points puts the same number in every sub-cell.
+  const Vec3 q = k::knit_sobol2(node * rays + m);  // other points per direction
+  const float ox = k::knit_frac(q.x + 0.5f), oy = k::knit_frac(q.y + 0.5f);
+  if (sub) *sub = std::min(int(oy * kSub), kSub - 1) * kSub + std::min(int(ox * kSub), kSub - 1);
+  return k::kv3((float(cell.second) + ox) * K_2PI, (float(cell.first) + oy) * g.row_spacing, 0);
+}
+
+FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& capm, int rays_per_direction,
+                               LayerCounts layer_counts, bool sub_cells) {
+  const k::KnitGeom& g = surface.geom();
+  // The cells of each class.
+  const ClassCells cells = class_cells(surface);
   class_of_.resize(size_t(g.rows) * size_t(g.cols));
   for (int k = 0; k < g.rows; ++k)
     for (int c = 0; c < g.cols; ++c)
@@ -217,16 +234,12 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
       hsub.clear();
       for (int m = 0; m < m_rays; ++m) {
         // Cells of the class in turn (a stride coprime with most sizes
-        // spreads them), the point inside the cell from a (0,2)-net: each
-        // run of 4^j of its points puts the same number in every sub-cell.
+        // spreads them), the point inside the cell from ray_origin's net.
         const std::pair<int, int>& cell = list[(size_t(m) * 7919u) % list.size()];
-        const Vec3 q = k::knit_sobol2((it * kPhiBins + ip) * m_rays + m);  // other points per direction
-        const float ox = k::knit_frac(q.x + 0.5f), oy = k::knit_frac(q.y + 0.5f);
-        const int si = std::min(int(oy * kSub), kSub - 1) * kSub + std::min(int(ox * kSub), kSub - 1);
+        int si = 0;
+        const Vec3 o = ray_origin(g, cell, it * kPhiBins + ip, m_rays, m, &si);
         sub[size_t(si)].rays += 1;
-        const float x = (float(cell.second) + ox) * K_2PI;
-        const float y = (float(cell.first) + oy) * g.row_spacing;
-        const k::KnitCapm st = k::knit_capm_curved(g, surface.codes(), surface.colors(), x, y, wi, 0, 0,
+        const k::KnitCapm st = k::knit_capm_curved(g, surface.codes(), surface.colors(), o.x, o.y, wi, 0, 0,
                                                    capm.max_segment, capm.max_steps);
         if (st.state != KNIT_CAPM_HIT) continue;
         const Vec3 sl = k::knit_ms_slopes(st.hit.n, side);  // as knit_aggregate takes them
@@ -453,7 +466,8 @@ inline bool FootprintTable::finish(k::KnitAggregate& a, int points, float p_delt
   return true;
 }
 
-k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
+k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi,
+                                           float* slot_hits) const {
   const k::KnitGeom& g = surface.geom();
   k::KnitAggregate a{};
   // The direction is the same for every cell, so the aggregate is a sum
@@ -530,6 +544,7 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
         tsum = add_line(tsum, t);
       }
       hits += n * double(std::clamp(h, 0.0f, 1.0f));
+      if (slot_hits) slot_hits[slot] = share * std::clamp(h, 0.0f, 1.0f);
     }
   }
   // In points: the cells of a box of up to KNIT_MS_MAX_POINTS, else the
@@ -641,7 +656,7 @@ void FootprintTable::for_each_sub(const k::KnitGeom& g, float x, float y, float 
 }
 
 k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, float x, float y, float ex, float ey,
-                                               Vec3 wi, float pick) const {
+                                               Vec3 wi, float pick, float* slot_hits) const {
   const k::KnitGeom& g = surface.geom();
   // The overlap areas summed per class and sub-cell: one weighted sum of
   // moments per pair present, however many cells the box touches.
@@ -678,6 +693,7 @@ k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, float
       }
       hit_of[size_t(ps)] = std::clamp(h, 0.0f, 1.0f);
       hits += double(share) * double(hit_of[size_t(ps)]);
+      if (slot_hits) slot_hits[ps / kSubCells] += share * hit_of[size_t(ps)];
     }
   };
   if (total > 0) {

@@ -108,6 +108,7 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
     const auto t0 = std::chrono::steady_clock::now();
     table_ = std::make_shared<const FootprintTable>(surface_, params_.capm_options, 256,
                                                     FootprintTable::LayerCounts::Auto, params_.table_min_cells < 1);
+    if (params_.table_bsdf) table_bsdf_ = std::make_shared<const TableBsdf>(*this, *table_);
     table_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
 }
@@ -121,7 +122,7 @@ size_t KnitMaterial::state_bytes() const {
            sizeof(int32_t);
   };
   return sizeof(*this) + heap(surface_.pattern()) + 4 * sizeof(Rgb) * size_t(params_.bsdf.num_colors()) +
-         (table_ ? table_->bytes() : 0);
+         (table_ ? table_->bytes() : 0) + (table_bsdf_ ? table_bsdf_->bytes() : 0);
 }
 
 k::KnitCapm KnitMaterial::march(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
@@ -274,13 +275,15 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     k::KnitAggregate a;
     // (the points only for the whole cells' and the marched footprints)
     const int points = rt == Route::SubCells ? 0 : footprint_points_for(fx, fy);
+    std::array<float, FootprintTable::kClasses> slot_hits{};  // the tabulated BSDF's mix
+    float* const mix_out = table_bsdf_ ? slot_hits.data() : nullptr;
     if (rt == Route::SubCells) {
-      a = table_->aggregate_sub(surface_, x, y, e.x, e.y, wi, shift[0]);  // flat-base, as below
+      a = table_->aggregate_sub(surface_, x, y, e.x, e.y, wi, shift[0], mix_out);  // flat-base, as below
       sh.from_table = true;
       sh.from_sub_cells = true;
     } else if (rt == Route::Cells) {
       const k::KFootprint f = k::knit_footprint(surface_.geom(), x, y, fx, fy, points, shift[0], shift[1]);
-      a = table_->aggregate(surface_, f, wi);  // flat-base statistics: no curvature needed
+      a = table_->aggregate(surface_, f, wi, mix_out);  // flat-base statistics: no curvature needed
       sh.from_table = true;
     } else {
       // The footprint's points share the frame at the hit; a frame field
@@ -308,6 +311,20 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
       set_colors(sh, 0);  // what mixing the one colour at weight 1 gives, bit for bit
     } else {
       mix_colors(sh, a.color_w);
+    }
+    if (mix_out) {
+      // The tabulated BSDF, in the base's frame (fabric x, y, front normal).
+      sh.table_bsdf = table_bsdf_.get();
+      sh.mix = table_bsdf_->mix(slot_hits.data(), wi);
+      if (sh.mix.n > 0) {
+        sh.st = hit.t;
+        sh.sb = hit.b;
+        sh.sn = hit.n;
+        const Vec3 d = k::kv3_sub(a.position, k::kv3(x, y, top));
+        sh.offset = k::kv3_scale(to_world(d, hit.t, hit.b, hit.n), 1.0f / S);
+        return sh;
+      }
+      sh.table_bsdf = nullptr;  // (hits too few to weigh: the lobes below)
     }
     // Shading frame: mean normal, mean tangent made orthogonal to it; then the
     // LEAN covariance, rotated into that frame, widens the specular lobes.
@@ -448,6 +465,14 @@ float KnitMaterial::transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameP
   // Hit or miss only (a corrected hit stays a hit: knit_capm_correct keeps
   // the first one when the corrected segment misses).
   return march(hit, ray_dir, frame, true).state == KNIT_CAPM_HIT ? 0.0f : 1.0f;
+}
+
+KnitShade KnitMaterial::point_shade(const BaseHit& hit, const k::KnitLineHit& h, bool from_back) const {
+  KnitShade sh = unshaded();
+  sh.from_back = from_back;
+  sh.in_shell = params_.capm;
+  shade_yarn(hit, h, nullptr, sh);
+  return sh;
 }
 
 k::KYarnBsdf KnitMaterial::kernel_bsdf(const KnitShade& sh) const {

@@ -703,7 +703,7 @@ TEST(FootprintTable, MaterialReadsSubCellsFromTableMinCells) {
   KnitMaterial whole(seed(), mp);
   ASSERT_TRUE(half.footprint_table()->has_sub_cells());
   ASSERT_FALSE(whole.footprint_table()->has_sub_cells());  // not built where they are not read
-  EXPECT_LT(4 * whole.state_bytes(), half.state_bytes());
+  EXPECT_LT(4 * whole.footprint_table()->bytes(), half.footprint_table()->bytes());
   EXPECT_THROW(whole.footprint_table()->p_delta_sub(whole.surface(), 1, 1, 0.6f, 0.6f, k::kv3(0, 0, 1)),
                std::logic_error);
   // Boxes outside the sub-cells' domain are refused, not read out of bounds.

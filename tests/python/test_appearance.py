@@ -733,6 +733,7 @@ class KnitMaterialMultiScale(unittest.TestCase):
         # The marched aggregate also below a stitch cell (by default those
         # footprints are shaded as the near field).
         self.agg = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0,
+                                          table_bsdf=False,
                                           near_field_below_cell=False, table_min_cells=1.0)
         self.rng = np.random.default_rng(21)
 
@@ -758,6 +759,31 @@ class KnitMaterialMultiScale(unittest.TestCase):
                 self.assertFalse(np.array_equal(ag["sn"], nf["sn"], equal_nan=True))
         big = self.m.shade(u, v, d, footprint=[7.0, 0.0, 0.0, 5.0], shift=[0.3, 0.7])
         self.assertTrue(np.all(big["steps"] == 0), "a cell or more in both directions: the class table")
+
+    def test_table_bsdf_is_the_default_and_can_be_turned_off(self):
+        # The class table's footprints are shaded with its tabulated BSDF
+        # (docs/multiscale.md): no widened lobes are reported then; with
+        # table_bsdf=False the mean normal's LEAN-widened lobes are.
+        m = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0)
+        lean = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0,
+                                      table_bsdf=False)
+        self.assertTrue(m.table_bsdf)
+        self.assertFalse(lean.table_bsdf)
+        self.assertGreater(m.state_bytes, lean.state_bytes + 2 * 144 * 144 * 8 - 1)
+        n = 200
+        u, v = self.rng.uniform(0, 40, n), self.rng.uniform(0, 40, n)
+        d = np.tile(-direction(30), (n, 1))
+        fp = [12.0, 0.0, 0.0, 10.0]
+        a = m.shade(u, v, d, footprint=fp, shift=[0.3, 0.7])
+        b = lean.shade(u, v, d, footprint=fp, shift=[0.3, 0.7])
+        np.testing.assert_array_equal(a["p_delta"], b["p_delta"])  # the same geometry
+        h = ~b["pass_through"]
+        self.assertTrue(h.any())
+        # widened by the slopes' spread (the tabulated shading reports the yarn's own lobes)
+        self.assertGreater(np.mean(b["alpha"][h, 0] * b["alpha"][h, 1]), 1.5 * 0.15 * 0.45)
+        np.testing.assert_allclose(a["alpha"][h, 0] * a["alpha"][h, 1], 0.15 * 0.45, rtol=1e-5)
+        with self.assertRaises(TypeError):
+            knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", table_bsdf="yes")
 
     def test_sub_cells_come_from_the_table(self):
         # By default (table_min_cells=0.5) a footprint of half a cell to a

@@ -34,6 +34,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 #include "knit/surface.h"
@@ -93,7 +94,10 @@ class FootprintTable {
   // KNIT_MS_MAX_POINTS of them, else the cells of f's points. (Without
   // prefix counts, a pattern too large for them, the geometry visits the
   // same cells as the colours.)
-  k::KnitAggregate aggregate(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi_local) const;
+  // slot_hits (kClasses floats, when given): per class slot, the box's
+  // share of cells of that class times its hit fraction (TableBsdf::mix).
+  k::KnitAggregate aggregate(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi_local,
+                             float* slot_hits = nullptr) const;
   // Only its p_delta (shadow rays).
   float p_delta(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi_local) const;
 
@@ -110,8 +114,11 @@ class FootprintTable {
   static constexpr int kSub = 4;
   static constexpr int kMaxSubBox = 64;
   static bool sub_box(float x, float y, float ex, float ey, const k::KnitGeom& g);
+  // slot_hits (kClasses floats, zeroed by the caller, when given): per
+  // class slot, the box's area share of that class times its sub-cells'
+  // hit fractions, summed.
   k::KnitAggregate aggregate_sub(const KnitSurface& surface, float x, float y, float ex, float ey, Vec3 wi_local,
-                                 float pick = 0.5f) const;
+                                 float pick = 0.5f, float* slot_hits = nullptr) const;
   float p_delta_sub(const KnitSurface& surface, float x, float y, float ex, float ey, Vec3 wi_local) const;
   // The per-sub-cell statistics (kMoments floats per class present,
   // sub-cell and direction node, as stored: rounded to bfloat16; the
@@ -121,6 +128,18 @@ class FootprintTable {
 
   // Class (0..9) of cell (row k from the bottom, column c) of the surface.
   static int cell_class(const KnitSurface& surface, int k, int c);
+  // The (row, column) cells of each class the build spreads its rays over:
+  // all of them, or a uniform sample of 1024 for a large pattern.
+  using ClassCells = std::array<std::vector<std::pair<int, int>>, kClasses>;
+  static ClassCells class_cells(const KnitSurface& surface);
+  // Where ray m of `rays` for direction node `node` enters cell `cell`
+  // (pattern x, y; z 0): a (0,2)-net over the cell, different per node;
+  // `sub`, when given, receives its sub-cell.
+  static Vec3 ray_origin(const k::KnitGeom& g, const std::pair<int, int>& cell, int node, int rays, int m,
+                         int* sub = nullptr);
+  // The slot of class cls (-1 when absent) and the class of a slot.
+  int slot_of(int cls) const { return slot_[size_t(cls)]; }
+  int class_of_slot(int slot) const { return class_of_slot_[size_t(slot)]; }
   // How many cells of each class f's box holds, as the aggregate counts
   // them (all -1 when the table cannot count them: it then visits the
   // cells), and the periods it counts over. For tests.

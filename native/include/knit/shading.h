@@ -20,6 +20,7 @@
 #include "knit/bsdf.h"
 #include "knit/ply_profile.h"
 #include "knit/surface.h"
+#include "knit/table_bsdf.h"
 
 namespace knit {
 
@@ -39,6 +40,12 @@ struct KnitMaterialParams {
   // footprints of table_min_cells up to a cell come from its sub-cell
   // statistics (docs/multiscale.md, "Footprints below a cell: sub-cells").
   float table_min_cells = 0.5f;
+  // Multi-scale with the class table: shade its footprints with the
+  // tabulated BSDF (TableBsdf: the near field's shading and self-shadowing
+  // averaged per class and pair of directions, built with the table);
+  // false: the yarn BSDF at the footprint's mean normal, its lobes widened
+  // by the normals' spread (LEAN), without self-shadowing.
+  bool table_bsdf = true;
   bool self_shadowing = true;   // near field: light and bounces from a yarn hit cross the rest of the shell
   // Multi-scale: a footprint below a stitch cell (in either direction) is
   // shaded as the near field at the hit (the pixel's samples cover the
@@ -76,6 +83,11 @@ struct KnitShade {
   bool from_table = false;   // multi-scale: the footprint came from the class table (no march)
   bool from_sub_cells = false;  // ... from its sub-cells (a footprint below a cell)
   bool aggregated = false;   // multi-scale: the footprint's points were marched and aggregated
+  // Multi-scale from the class table with table_bsdf: shade with this
+  // tabulated BSDF and mix, in the frame (st, sb, sn) of the base (the
+  // specular lobes are then unused).
+  const TableBsdf* table_bsdf = nullptr;
+  TableBsdf::Mix mix;
   // Near field: the yarn point hit, inside the shell (pattern space). Light
   // and bounces leaving it cross the rest of the shell first: occluded_from
   // and shade_from march from it.
@@ -127,6 +139,9 @@ class KnitMaterial {
   // The kernel BSDF at a shading point (colour from the palette, roughness,
   // layers and ply shadow from `sh`).
   k::KYarnBsdf kernel_bsdf(const KnitShade& sh) const;
+  // The near field's shading of yarn hit h of a ray that met the base at
+  // `hit` (from behind when from_back), as shade() gives it.
+  KnitShade point_shade(const BaseHit& hit, const k::KnitLineHit& h, bool from_back) const;
 
   // Memory the model keeps: pattern arrays, ply table, parameters, the
   // multi-scale footprint table (bytes).
@@ -138,6 +153,9 @@ class KnitMaterial {
   // Wall time the constructor spent building the multi-scale class table
   // (0 without one): most of a multi-scale material's set-up.
   double table_seconds() const { return table_seconds_; }
+  // The class table's tabulated BSDF (multi-scale with footprint_table and
+  // table_bsdf), else null.
+  const TableBsdf* table_bsdf() const { return table_bsdf_.get(); }
 
  private:
   k::KnitCapm march(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame, bool blocked_only = false) const;
@@ -184,6 +202,7 @@ class KnitMaterial {
   YarnBsdf bsdf_;
   PlyProfile ply_;
   std::shared_ptr<const FootprintTable> table_;  // multi-scale with footprint_table: built at construction
+  std::shared_ptr<const TableBsdf> table_bsdf_;  // with table_ when params_.table_bsdf
   double table_seconds_ = 0;  // what table_seconds() returns
   float arc_per_t_ = 1;     // mean arc length of the yarn per unit of curve parameter
   float mean_shadow_ = 1;   // ply shadow averaged around and along the yarn

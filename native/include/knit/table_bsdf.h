@@ -1,0 +1,127 @@
+// TableBsdf: the tabulated shading of the multi-scale class table
+// (docs/multiscale.md, "The table's shading: a tabulated BSDF").
+//
+// A footprint read from the class table used to be shaded as one yarn
+// point: the yarn BSDF at the hits' mean normal, its specular lobes widened
+// by the slope covariance (LEAN). Tubes show normals over a whole
+// hemisphere, which no widened lobe around a mean normal describes, and
+// that shading had no self-shadowing: under one light the swatch's
+// specular came out 57-89% too dark, and the shadows it lacked hid part of
+// that in scenes lit from several sides.
+//
+// This table holds instead, per class present and per pair of view and
+// light directions on a coarse (theta, phi) grid over the whole sphere, the
+// mean over the yarn points that the view rays hit of
+//
+//     f(wo, wi) |wi . n| V(wi)
+//
+// with the near field's own shading at each point (the yarn BSDF in the
+// point's ply frame, its ply shadow) and V its self-shadowing march towards
+// the light. The yarn BSDF is linear in the two body colours, so each pair
+// keeps three numbers: the colour-free part A and the factors Br and Bt of
+// the reflection and transmission colours, f |wi.z| = A + Br kd_r + Bt kd_t
+// per channel. Directions are in the fabric's frame (x along the pattern's
+// x, z its front normal); the aggregate is conditioned on a hit (the pass
+// through the gaps is the class table's p_delta). What it leaves out: light
+// scattered between yarns inside the shell (the near field's bounces), the
+// base's curvature, and the sub-cells' own shading (a footprint below a
+// cell mixes its classes' tables by the sub-cells' hit fractions).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "knit/aggregate_table.h"
+
+namespace knit {
+
+class KnitMaterial;
+
+class TableBsdf {
+ public:
+  static constexpr int kTheta = 12;  // nodes i pi / 11 over [0, pi] (none on the horizon)
+  static constexpr int kPhi = 12;    // nodes j 2 pi / 12
+  static constexpr int kNodes = kTheta * kPhi;
+  static constexpr int kMaxTerms = FootprintTable::kClasses * 4;
+
+  // Built for `material`, whose class table it follows (its classes and
+  // their cells): `hits_per_view` view rays per class and view node, each
+  // hit shaded towards every light node, and the first hits_per_view /
+  // march_stride of them (a stratified prefix of the rays' net)
+  // shadow-marched there too: V enters as the lit share of f over those.
+  // Every core.
+  TableBsdf(const KnitMaterial& material, const FootprintTable& table, int hits_per_view = 256,
+            int march_stride = 4);
+
+  // A footprint's shading seen from wo (fabric frame, unit, either side):
+  // the (class, view node) rows to mix and their weights. `slot_hits`
+  // holds, per class slot of the table, the footprint's hits on that class
+  // (any scale; FootprintTable::aggregate's slot_hits).
+  struct Mix {
+    int n = 0;
+    std::array<int32_t, kMaxTerms> row{};
+    std::array<float, kMaxTerms> w{};
+    std::array<float, FootprintTable::kClasses> share{};  // the classes' shares of the hits
+  };
+  Mix mix(const float* slot_hits, Vec3 wo) const;
+  // The same classes seen from another direction wo.
+  void remix(Mix& m, Vec3 wo) const;
+
+  // f(wo, wi) |wi.z| V(wi) of the mix towards wi (fabric frame, unit), per
+  // channel, with body colours kd_r, kd_t: the light that reaches the
+  // yarn points along wi. `total`, when given, receives f |wi.z| without
+  // V: the lit part and the part shadowed by other yarn together.
+  Vec3 eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total = nullptr) const;
+  // The sampling density of sample() (solid angle): piecewise constant per
+  // light node's cell, in proportion to the mix's total (lit and shadowed)
+  // there with the colours' means cr, ct, blended with a uniform share of
+  // the sphere.
+  float pdf(const Mix& m, Vec3 wi, float cr, float ct) const;
+  // A direction from pdf() with three uniform numbers; false when the mix
+  // is empty. Sets wi, its density and, when asked, a fourth uniform number
+  // left over from u0's choices.
+  bool sample(const Mix& m, float cr, float ct, float u0, float u1, float u2, Vec3& wi, float& pdf,
+              float* u_rest = nullptr) const;
+
+  // Share of sample() drawn uniformly over the sphere (covers every
+  // direction where the tabulated value is not zero).
+  static constexpr float kUniform = 0.15f;
+
+  size_t bytes() const { return sizeof(*this) + values_.size() * sizeof(uint16_t) + rows_.size() * sizeof(float); }
+  double build_seconds() const { return seconds_; }
+  // The tabulated A, Br, Bt (without V) and the lit share of class slot
+  // `slot`, view node `view`, light node `light` (as stored), for tests;
+  // and a node's direction.
+  std::array<float, 4> value(int slot, int view, int light) const;
+  static Vec3 node_direction(int node);
+
+ private:
+  // The four grid nodes around a direction and their bilinear weights.
+  struct Corners {
+    std::array<int, 4> node;
+    std::array<float, 4> w;
+  };
+  static Corners corners(Vec3 d);
+  // The light node whose cell (theta and phi within half a node spacing)
+  // holds d, and the solid angle of a row's cells.
+  static int cell_of(Vec3 d);
+  static float cell_solid_angle(int theta_row);
+  // The mix's sampling value at light node l (A + cr Br + ct Bt).
+  float node_value(const Mix& m, int l, float cr, float ct) const;
+  // The mix's sampling values summed over the solid angle of each theta
+  // row (kTheta) and over the sphere.
+  float row_total(const Mix& m, int theta_row, float cr, float ct) const;
+
+  static constexpr int kValues = 4;
+  int slots_ = 0;
+  // [slot][view node][light node][A, Br, Bt, lit share] as bfloat16.
+  std::vector<uint16_t> values_;
+  // [slot][view node][theta row][A, Br, Bt]: the values summed over the
+  // row's light nodes times their cells' solid angle (sample, pdf).
+  std::vector<float> rows_;
+  double seconds_ = 0;
+};
+
+}  // namespace knit

@@ -1,0 +1,310 @@
+#include "knit/table_bsdf.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+#include "knit/shading.h"
+
+namespace knit {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+constexpr float kDTheta = kPi / float(TableBsdf::kTheta - 1);
+constexpr float kDPhi = 2 * kPi / float(TableBsdf::kPhi);
+
+uint16_t bf16(float v) {  // rounded to nearest; the values are finite and >= 0
+  uint32_t bits;
+  std::memcpy(&bits, &v, sizeof bits);
+  bits += 0x7fffu + ((bits >> 16) & 1u);
+  return uint16_t(bits >> 16);
+}
+
+float from_bf16(uint16_t v) {
+  const uint32_t bits = uint32_t(v) << 16;
+  float f;
+  std::memcpy(&f, &bits, sizeof f);
+  return f;
+}
+
+// A 32-bit integer hash (the finaliser of MurmurHash3): every input bit
+// reaches every output bit.
+uint32_t hash32(uint32_t h) {
+  h ^= h >> 16;
+  h *= 0x85ebca6bu;
+  h ^= h >> 13;
+  h *= 0xc2b2ae35u;
+  h ^= h >> 16;
+  return h;
+}
+
+// Theta and phi (in [0, 2 pi)) of a unit direction.
+void angles(Vec3 d, float& th, float& ph) {
+  th = atan2_approx(std::sqrt(d.x * d.x + d.y * d.y), d.z);
+  ph = atan2_approx(d.y, d.x);
+  if (ph < 0) ph += 2 * kPi;
+}
+
+// A direction in the frame (t, b, n): its components along them.
+Vec3 to_local(Vec3 w, Vec3 t, Vec3 b, Vec3 n) { return k::kv3(k::kv3_dot(w, t), k::kv3_dot(w, b), k::kv3_dot(w, n)); }
+
+}  // namespace
+
+Vec3 TableBsdf::node_direction(int node) {
+  const int it = node / kPhi, ip = node % kPhi;
+  const float th = float(it) * kDTheta, ph = float(ip) * kDPhi;
+  return k::kv3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
+}
+
+TableBsdf::Corners TableBsdf::corners(Vec3 d) {
+  float th, ph;
+  angles(d, th, ph);
+  const float ft = std::clamp(th / kDTheta, 0.0f, float(kTheta - 1));
+  const int i0 = std::min(int(ft), kTheta - 1), i1 = std::min(i0 + 1, kTheta - 1);
+  const float wt = ft - float(i0);
+  const float fp = ph / kDPhi;
+  const int j0 = std::min(int(fp), kPhi - 1), j1 = (j0 + 1) % kPhi;
+  const float wp = std::clamp(fp - float(j0), 0.0f, 1.0f);
+  Corners c;
+  c.node = {i0 * kPhi + j0, i0 * kPhi + j1, i1 * kPhi + j0, i1 * kPhi + j1};
+  c.w = {(1 - wt) * (1 - wp), (1 - wt) * wp, wt * (1 - wp), wt * wp};
+  return c;
+}
+
+int TableBsdf::cell_of(Vec3 d) {
+  float th, ph;
+  angles(d, th, ph);
+  const int i = std::clamp(int(th / kDTheta + 0.5f), 0, kTheta - 1);
+  const int j = int(ph / kDPhi + 0.5f) % kPhi;
+  return i * kPhi + j;
+}
+
+float TableBsdf::cell_solid_angle(int i) {
+  const float lo = std::max(0.0f, (float(i) - 0.5f) * kDTheta), hi = std::min(kPi, (float(i) + 0.5f) * kDTheta);
+  return (std::cos(lo) - std::cos(hi)) * kDPhi;
+}
+
+TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, int hits_per_view,
+                     int march_stride) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const KnitSurface& surface = material.surface();
+  const k::KnitGeom& g = surface.geom();
+  const CapmOptions& capm = material.params().capm_options;
+  const FootprintTable::ClassCells cells = FootprintTable::class_cells(surface);
+  const int rays = std::max(1, hits_per_view);
+  const int stride = std::max(1, march_stride);
+  const int marches = std::max(1, rays / stride);
+  slots_ = table.classes_present();
+  values_.assign(size_t(slots_) * kNodes * kNodes * kValues, 0);
+  rows_.assign(size_t(slots_) * kNodes * (kTheta + 1) * 3, 0.0f);
+  std::array<Vec3, kNodes> light;
+  for (int l = 0; l < kNodes; ++l) light[size_t(l)] = node_direction(l);
+  std::array<float, kTheta> omega;
+  for (int i = 0; i < kTheta; ++i) omega[size_t(i)] = cell_solid_angle(i);
+  // The pole rows are one direction each: their first column is computed,
+  // the others copy it (views) or its values (lights).
+  const auto is_pole_copy = [](int node) { return (node / kPhi == 0 || node / kPhi == kTheta - 1) && node % kPhi; };
+  tbb::parallel_for(0, slots_ * kNodes, [&](int job) {
+    const int slot = job / kNodes, view = job % kNodes;
+    if (is_pole_copy(view)) return;
+    const std::vector<std::pair<int, int>>& list = cells[size_t(table.class_of_slot(slot))];
+    const Vec3 wo = light[size_t(view)];
+    // Sums over the hits of f |wi.n| per light node and channel (all), and
+    // over the hits whose shadows are marched, with and without V.
+    std::vector<double> all(size_t(kNodes) * 3, 0.0), lit(size_t(kNodes) * 3, 0.0), marched(size_t(kNodes) * 3, 0.0);
+    int hits = 0;
+    for (int m = 0; m < rays; ++m) {
+      // The cell by a hash of (m, view): the class table's stride would tie
+      // each cell to a stripe of the net's points, and cells of one class
+      // differ here (the ply's phase runs on along the row), which biased
+      // the mean by up to 15%.
+      const std::pair<int, int>& cell = list[hash32(uint32_t(m) * 0x9e3779b9u ^ uint32_t(view) * 0x85ebca6bu) %
+                                             list.size()];
+      const Vec3 o = FootprintTable::ray_origin(g, cell, view, rays, m);
+      const k::KnitCapm st = k::knit_capm_curved(g, surface.codes(), surface.colors(), o.x, o.y, wo, 0, 0,
+                                                 capm.max_segment, capm.max_steps);
+      if (st.state != KNIT_CAPM_HIT) continue;
+      ++hits;
+      // The near field's shading of the point, on a flat base whose frame
+      // is pattern space itself; colours (1, 0, 0) and (0, 1, 0) put the
+      // two body lobes in channels x and y, the colour-free part in z.
+      BaseHit base;
+      KnitShade sh = material.point_shade(base, st.hit, wo.z < 0);
+      sh.kd_r = Rgb{1, 0, 0};
+      sh.kd_t = Rgb{0, 1, 0};
+      const k::KYarnBsdf bsdf = material.kernel_bsdf(sh);
+      const Vec3 n = k::kv3_normalize(sh.sn);
+      const Vec3 t = k::kv3_normalize(k::kv3_sub(sh.st, k::kv3_scale(n, k::kv3_dot(sh.st, n))));
+      const Vec3 b = k::kv3_cross(n, t);
+      const Vec3 wo_l = to_local(wo, t, b, n);
+      const bool march = m < marches;  // the net's first points: stratified too
+      for (int l = 0; l < kNodes; ++l) {
+        if (is_pole_copy(l)) continue;
+        const Vec3 f = k::yarn_bsdf_eval(bsdf, wo_l, to_local(light[size_t(l)], t, b, n));
+        if (!(f.x > 0 || f.y > 0 || f.z > 0)) continue;
+        const double v[3] = {double(f.z), double(f.x - f.z), double(f.y - f.z)};
+        for (int c = 0; c < 3; ++c) all[size_t(l) * 3 + size_t(c)] += v[c];
+        if (!march) continue;
+        for (int c = 0; c < 3; ++c) marched[size_t(l) * 3 + size_t(c)] += v[c];
+        if (material.occluded_from(base, sh, light[size_t(l)], nullptr)) continue;
+        for (int c = 0; c < 3; ++c) lit[size_t(l) * 3 + size_t(c)] += v[c];
+      }
+    }
+    const double inv = hits ? 1.0 / hits : 0.0;
+    for (int l = 0; l < kNodes; ++l) {
+      const size_t src = size_t(is_pole_copy(l) ? l - l % kPhi : l) * 3;
+      uint16_t* out = &values_[((size_t(slot) * kNodes + size_t(view)) * kNodes + size_t(l)) * kValues];
+      for (int c = 0; c < 3; ++c) out[c] = bf16(float(std::max(0.0, all[src + size_t(c)] * inv)));
+      // The lit share of f over the marched hits (a ratio estimator: the
+      // shadows' marches are 95% of the build, the BSDF's evaluations cheap
+      // and their variance high), one for the three parts, weighed as a
+      // grey yarn's colours would weigh them.
+      const double m = marched[src] + 0.5 * (marched[src + 1] + marched[src + 2]);
+      const double v = lit[src] + 0.5 * (lit[src + 1] + lit[src + 2]);
+      out[3] = bf16(float(m > 0 ? std::clamp(v / m, 0.0, 1.0) : 1.0));
+    }
+  });
+  for (int slot = 0; slot < slots_; ++slot)
+    for (int view = 0; view < kNodes; ++view) {
+      if (is_pole_copy(view)) {
+        const size_t n = size_t(kNodes) * kValues;
+        const uint16_t* src = &values_[(size_t(slot) * kNodes + size_t(view - view % kPhi)) * n];
+        std::copy(src, src + n, &values_[(size_t(slot) * kNodes + size_t(view)) * n]);
+      }
+      // Row sums over solid angle, as stored (bfloat16), and their total.
+      float* r = &rows_[(size_t(slot) * kNodes + size_t(view)) * (kTheta + 1) * 3];
+      for (int l = 0; l < kNodes; ++l) {
+        const std::array<float, 4> v = value(slot, view, l);
+        for (int c = 0; c < 3; ++c) r[size_t(l / kPhi) * 3 + size_t(c)] += omega[size_t(l / kPhi)] * v[size_t(c)];
+      }
+      for (int i = 0; i < kTheta; ++i)
+        for (int c = 0; c < 3; ++c) r[size_t(kTheta) * 3 + size_t(c)] += r[size_t(i) * 3 + size_t(c)];
+    }
+  seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+std::array<float, 4> TableBsdf::value(int slot, int view, int l) const {
+  const uint16_t* p = &values_[((size_t(slot) * kNodes + size_t(view)) * kNodes + size_t(l)) * kValues];
+  return {from_bf16(p[0]), from_bf16(p[1]), from_bf16(p[2]), from_bf16(p[3])};
+}
+
+TableBsdf::Mix TableBsdf::mix(const float* slot_hits, Vec3 wo) const {
+  Mix m;
+  float total = 0;
+  for (int s = 0; s < slots_; ++s) total += std::max(0.0f, slot_hits[s]);
+  if (!(total > 0)) return m;
+  for (int s = 0; s < slots_; ++s) m.share[size_t(s)] = std::max(0.0f, slot_hits[s]) / total;
+  remix(m, wo);
+  return m;
+}
+
+void TableBsdf::remix(Mix& m, Vec3 wo) const {
+  m.n = 0;
+  const Corners c = corners(wo);
+  for (int s = 0; s < slots_; ++s) {
+    const float share = m.share[size_t(s)];
+    if (!(share > 0)) continue;
+    for (int q = 0; q < 4; ++q) {
+      const float w = share * c.w[size_t(q)];
+      if (!(w > 0)) continue;
+      m.row[size_t(m.n)] = s * kNodes + c.node[size_t(q)];
+      m.w[size_t(m.n)] = w;
+      ++m.n;
+    }
+  }
+}
+
+Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total) const {
+  const Corners c = corners(wi);
+  float a = 0, br = 0, bt = 0, ta = 0, tbr = 0, tbt = 0;
+  for (int t = 0; t < m.n; ++t) {
+    const uint16_t* row = &values_[size_t(m.row[size_t(t)]) * kNodes * kValues];
+    for (int q = 0; q < 4; ++q) {
+      const float w = m.w[size_t(t)] * c.w[size_t(q)];
+      const uint16_t* p = row + size_t(c.node[size_t(q)]) * kValues;
+      const float pa = w * from_bf16(p[0]), pbr = w * from_bf16(p[1]), pbt = w * from_bf16(p[2]);
+      const float lit = from_bf16(p[3]);
+      ta += pa;
+      tbr += pbr;
+      tbt += pbt;
+      a += lit * pa;
+      br += lit * pbr;
+      bt += lit * pbt;
+    }
+  }
+  const auto rgb = [&](float a_, float br_, float bt_) {
+    return k::kv3(a_ + br_ * kd_r.x + bt_ * kd_t.x, a_ + br_ * kd_r.y + bt_ * kd_t.y, a_ + br_ * kd_r.z + bt_ * kd_t.z);
+  };
+  if (total) *total = rgb(ta, tbr, tbt);
+  return rgb(a, br, bt);
+}
+
+float TableBsdf::node_value(const Mix& m, int l, float cr, float ct) const {
+  float v = 0;
+  for (int t = 0; t < m.n; ++t) {
+    const uint16_t* p = &values_[(size_t(m.row[size_t(t)]) * kNodes + size_t(l)) * kValues];
+    v += m.w[size_t(t)] * (from_bf16(p[0]) + cr * from_bf16(p[1]) + ct * from_bf16(p[2]));
+  }
+  return v;
+}
+
+float TableBsdf::row_total(const Mix& m, int i, float cr, float ct) const {
+  float v = 0;
+  for (int t = 0; t < m.n; ++t) {
+    const float* r = &rows_[(size_t(m.row[size_t(t)]) * (kTheta + 1) + size_t(i)) * 3];
+    v += m.w[size_t(t)] * (r[0] + cr * r[1] + ct * r[2]);
+  }
+  return v;
+}
+
+float TableBsdf::pdf(const Mix& m, Vec3 wi, float cr, float ct) const {
+  constexpr float kUniformPdf = kUniform / (4 * kPi);
+  const float total = row_total(m, kTheta, cr, ct);
+  if (!(total > 0)) return 1 / (4 * kPi);
+  return (1 - kUniform) * node_value(m, cell_of(wi), cr, ct) / total + kUniformPdf;
+}
+
+bool TableBsdf::sample(const Mix& m, float cr, float ct, float u0, float u1, float u2, Vec3& wi, float& pdf_out,
+                       float* u_rest) const {
+  if (m.n == 0) return false;
+  const float total = row_total(m, kTheta, cr, ct);
+  float z, ph;
+  if (!(total > 0) || u0 < kUniform) {
+    z = 1 - 2 * u1;  // uniform over the sphere
+    ph = 2 * kPi * u2;
+    if (u_rest) *u_rest = total > 0 ? u0 / kUniform : u0;
+  } else {
+    // A light node's cell in proportion to its value times its solid
+    // angle: the theta row first, then the node in it.
+    float target = (u0 - kUniform) / (1 - kUniform) * total;
+    int i = 0;
+    for (; i < kTheta - 1; ++i) {
+      const float r = row_total(m, i, cr, ct);
+      if (target < r) break;
+      target -= r;
+    }
+    const float om = cell_solid_angle(i);
+    int j = 0;
+    float v = 0;
+    for (; j < kPhi; ++j) {
+      v = node_value(m, i * kPhi + j, cr, ct) * om;
+      if (target < v || j == kPhi - 1) break;
+      target -= v;
+    }
+    if (u_rest) *u_rest = v > 0 ? std::clamp(target / v, 0.0f, 0.99999994f) : 0.5f;
+    const float lo = std::max(0.0f, (float(i) - 0.5f) * kDTheta), hi = std::min(kPi, (float(i) + 0.5f) * kDTheta);
+    const float clo = std::cos(lo), chi = std::cos(hi);
+    z = clo + (chi - clo) * u1;
+    ph = (float(j) - 0.5f + u2) * kDPhi;
+  }
+  const float s = std::sqrt(std::max(0.0f, 1 - z * z));
+  wi = k::kv3(s * std::cos(ph), s * std::sin(ph), z);
+  pdf_out = pdf(m, wi, cr, ct);
+  return pdf_out > 0;
+}
+
+}  // namespace knit
