@@ -13,7 +13,6 @@ knit::k::kvec3 table_eval(const YarnShading& y, Vec3 wi, knit::k::kvec3* total =
   return y.table->eval(y.mix, to_kvec(wi), y.bsdf.kd_r, y.bsdf.kd_t, total);
 }
 float lum(knit::k::kvec3 c) { return c.x + c.y + c.z; }
-float mean3(knit::k::kvec3 c) { return (c.x + c.y + c.z) * (1.0f / 3.0f); }
 }  // namespace
 
 Rgb YarnShadedMaterial::eval(const SurfaceInteraction& si, Vec3 wo, Vec3 wi) const {
@@ -32,7 +31,7 @@ float YarnShadedMaterial::pdf(const SurfaceInteraction& si, Vec3 wo, Vec3 wi) co
     knit::k::kvec3 total;
     const knit::k::kvec3 lit = table_eval(si.yarn, wi, &total);
     const float q = lum(total) > 0 ? std::min(1.0f, lum(lit) / lum(total)) : 0.0f;
-    return q * si.yarn.table->pdf(si.yarn.mix, to_kvec(wi), mean3(si.yarn.bsdf.kd_r), mean3(si.yarn.bsdf.kd_t));
+    return q * si.yarn.table->pdf(si.yarn.mix, to_kvec(wi));
   }
   return knit::k::yarn_bsdf_pdf(si.yarn.bsdf, to_kvec(wo), to_kvec(wi));
 }
@@ -46,8 +45,7 @@ bool YarnShadedMaterial::sample(const SurfaceInteraction& si, Vec3 wo, float uc,
     // way the weight is total / pdf.
     knit::k::kvec3 wi;
     float pdf = 0, u3 = 0;
-    if (!si.yarn.table->sample(si.yarn.mix, mean3(si.yarn.bsdf.kd_r), mean3(si.yarn.bsdf.kd_t), uc, u.x, u.y, wi,
-                               pdf, &u3) ||
+    if (!si.yarn.table->sample(si.yarn.mix, uc, u.x, u.y, wi, pdf, &u3) ||
         wi.z == 0.0f)
       return false;
     knit::k::kvec3 total;

@@ -315,7 +315,8 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     if (mix_out) {
       // The tabulated BSDF, in the base's frame (fabric x, y, front normal).
       sh.table_bsdf = table_bsdf_.get();
-      sh.mix = table_bsdf_->mix(slot_hits.data(), wi);
+      sh.mix = table_bsdf_->mix(slot_hits.data(), wi, (sh.kd_r.r + sh.kd_r.g + sh.kd_r.b) / 3,
+                                (sh.kd_t.r + sh.kd_t.g + sh.kd_t.b) / 3);
       if (sh.mix.n > 0) {
         sh.st = hit.t;
         sh.sb = hit.b;

@@ -31,6 +31,28 @@ float from_bf16(uint16_t v) {
   return f;
 }
 
+// Four floats as one vector (GCC and Clang vector extensions): the table's
+// sums run four lanes at a time.
+typedef float F4 __attribute__((vector_size(16)));
+typedef uint16_t U4 __attribute__((vector_size(8)));
+typedef uint32_t W4 __attribute__((vector_size(16)));
+
+F4 load4(const float* p) {
+  F4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+// Four stored bfloat16 values as floats.
+F4 bf16x4(const uint16_t* p) {
+  U4 h;
+  std::memcpy(&h, p, sizeof h);
+  const W4 bits = __builtin_convertvector(h, W4) << 16;
+  F4 f;
+  std::memcpy(&f, &bits, sizeof f);
+  return f;
+}
+
 // A 32-bit integer hash (the finaliser of MurmurHash3): every input bit
 // reaches every output bit.
 uint32_t hash32(uint32_t h) {
@@ -100,7 +122,7 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
   const int marches = std::max(1, rays / stride);
   slots_ = table.classes_present();
   values_.assign(size_t(slots_) * kNodes * kNodes * kValues, 0);
-  rows_.assign(size_t(slots_) * kNodes * (kTheta + 1) * 3, 0.0f);
+  rows_.assign(size_t(slots_) * kNodes * (kTheta + 1) * 4, 0.0f);
   std::array<Vec3, kNodes> light;
   for (int l = 0; l < kNodes; ++l) light[size_t(l)] = node_direction(l);
   std::array<float, kTheta> omega;
@@ -176,13 +198,13 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
         std::copy(src, src + n, &values_[(size_t(slot) * kNodes + size_t(view)) * n]);
       }
       // Row sums over solid angle, as stored (bfloat16), and their total.
-      float* r = &rows_[(size_t(slot) * kNodes + size_t(view)) * (kTheta + 1) * 3];
+      float* r = &rows_[(size_t(slot) * kNodes + size_t(view)) * (kTheta + 1) * 4];
       for (int l = 0; l < kNodes; ++l) {
         const std::array<float, 4> v = value(slot, view, l);
-        for (int c = 0; c < 3; ++c) r[size_t(l / kPhi) * 3 + size_t(c)] += omega[size_t(l / kPhi)] * v[size_t(c)];
+        for (int c = 0; c < 3; ++c) r[size_t(l / kPhi) * 4 + size_t(c)] += omega[size_t(l / kPhi)] * v[size_t(c)];
       }
       for (int i = 0; i < kTheta; ++i)
-        for (int c = 0; c < 3; ++c) r[size_t(kTheta) * 3 + size_t(c)] += r[size_t(i) * 3 + size_t(c)];
+        for (int c = 0; c < 3; ++c) r[size_t(kTheta) * 4 + size_t(c)] += r[size_t(i) * 4 + size_t(c)];
     }
   seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -192,8 +214,10 @@ std::array<float, 4> TableBsdf::value(int slot, int view, int l) const {
   return {from_bf16(p[0]), from_bf16(p[1]), from_bf16(p[2]), from_bf16(p[3])};
 }
 
-TableBsdf::Mix TableBsdf::mix(const float* slot_hits, Vec3 wo) const {
+TableBsdf::Mix TableBsdf::mix(const float* slot_hits, Vec3 wo, float cr, float ct) const {
   Mix m;
+  m.cr = cr;
+  m.ct = ct;
   float total = 0;
   for (int s = 0; s < slots_; ++s) total += std::max(0.0f, slot_hits[s]);
   if (!(total > 0)) return m;
@@ -216,62 +240,55 @@ void TableBsdf::remix(Mix& m, Vec3 wo) const {
       ++m.n;
     }
   }
+  // The sampling rows, once per shading point (sample and pdf read them).
+  std::array<F4, kTheta + 1> sum{};
+  for (int t = 0; t < m.n; ++t) {
+    const float* r = &rows_[size_t(m.row[size_t(t)]) * (kTheta + 1) * 4];
+    const float w = m.w[size_t(t)];
+    for (int i = 0; i <= kTheta; ++i) sum[size_t(i)] += w * load4(r + 4 * i);
+  }
+  for (int i = 0; i <= kTheta; ++i) m.rows[size_t(i)] = sum[size_t(i)][0] + m.cr * sum[size_t(i)][1] + m.ct * sum[size_t(i)][2];
 }
 
 Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total) const {
   const Corners c = corners(wi);
-  float a = 0, br = 0, bt = 0, ta = 0, tbr = 0, tbt = 0;
+  // Sums of the lit parts (A, Br, Bt times the lit share) and, when asked,
+  // of the parts themselves, four lanes at a time.
+  F4 lit{}, all{};
   for (int t = 0; t < m.n; ++t) {
     const uint16_t* row = &values_[size_t(m.row[size_t(t)]) * kNodes * kValues];
     for (int q = 0; q < 4; ++q) {
       const float w = m.w[size_t(t)] * c.w[size_t(q)];
-      const uint16_t* p = row + size_t(c.node[size_t(q)]) * kValues;
-      const float pa = w * from_bf16(p[0]), pbr = w * from_bf16(p[1]), pbt = w * from_bf16(p[2]);
-      const float lit = from_bf16(p[3]);
-      ta += pa;
-      tbr += pbr;
-      tbt += pbt;
-      a += lit * pa;
-      br += lit * pbr;
-      bt += lit * pbt;
+      const F4 p = bf16x4(row + size_t(c.node[size_t(q)]) * kValues);
+      lit += (w * p[3]) * p;
+      if (total) all += w * p;
     }
   }
-  const auto rgb = [&](float a_, float br_, float bt_) {
-    return k::kv3(a_ + br_ * kd_r.x + bt_ * kd_t.x, a_ + br_ * kd_r.y + bt_ * kd_t.y, a_ + br_ * kd_r.z + bt_ * kd_t.z);
+  const auto rgb = [&](const F4& v) {
+    return k::kv3(v[0] + v[1] * kd_r.x + v[2] * kd_t.x, v[0] + v[1] * kd_r.y + v[2] * kd_t.y,
+                  v[0] + v[1] * kd_r.z + v[2] * kd_t.z);
   };
-  if (total) *total = rgb(ta, tbr, tbt);
-  return rgb(a, br, bt);
+  if (total) *total = rgb(all);
+  return rgb(lit);
 }
 
-float TableBsdf::node_value(const Mix& m, int l, float cr, float ct) const {
-  float v = 0;
-  for (int t = 0; t < m.n; ++t) {
-    const uint16_t* p = &values_[(size_t(m.row[size_t(t)]) * kNodes + size_t(l)) * kValues];
-    v += m.w[size_t(t)] * (from_bf16(p[0]) + cr * from_bf16(p[1]) + ct * from_bf16(p[2]));
-  }
-  return v;
+float TableBsdf::node_value(const Mix& m, int l) const {
+  F4 v{};
+  for (int t = 0; t < m.n; ++t)
+    v += m.w[size_t(t)] * bf16x4(&values_[(size_t(m.row[size_t(t)]) * kNodes + size_t(l)) * kValues]);
+  return v[0] + m.cr * v[1] + m.ct * v[2];
 }
 
-float TableBsdf::row_total(const Mix& m, int i, float cr, float ct) const {
-  float v = 0;
-  for (int t = 0; t < m.n; ++t) {
-    const float* r = &rows_[(size_t(m.row[size_t(t)]) * (kTheta + 1) + size_t(i)) * 3];
-    v += m.w[size_t(t)] * (r[0] + cr * r[1] + ct * r[2]);
-  }
-  return v;
-}
-
-float TableBsdf::pdf(const Mix& m, Vec3 wi, float cr, float ct) const {
+float TableBsdf::pdf(const Mix& m, Vec3 wi) const {
   constexpr float kUniformPdf = kUniform / (4 * kPi);
-  const float total = row_total(m, kTheta, cr, ct);
+  const float total = m.rows[kTheta];
   if (!(total > 0)) return 1 / (4 * kPi);
-  return (1 - kUniform) * node_value(m, cell_of(wi), cr, ct) / total + kUniformPdf;
+  return (1 - kUniform) * node_value(m, cell_of(wi)) / total + kUniformPdf;
 }
 
-bool TableBsdf::sample(const Mix& m, float cr, float ct, float u0, float u1, float u2, Vec3& wi, float& pdf_out,
-                       float* u_rest) const {
+bool TableBsdf::sample(const Mix& m, float u0, float u1, float u2, Vec3& wi, float& pdf_out, float* u_rest) const {
   if (m.n == 0) return false;
-  const float total = row_total(m, kTheta, cr, ct);
+  const float total = m.rows[kTheta];
   float z, ph;
   if (!(total > 0) || u0 < kUniform) {
     z = 1 - 2 * u1;  // uniform over the sphere
@@ -283,15 +300,23 @@ bool TableBsdf::sample(const Mix& m, float cr, float ct, float u0, float u1, flo
     float target = (u0 - kUniform) / (1 - kUniform) * total;
     int i = 0;
     for (; i < kTheta - 1; ++i) {
-      const float r = row_total(m, i, cr, ct);
+      const float r = m.rows[size_t(i)];
       if (target < r) break;
       target -= r;
+    }
+    // The row's node values in one pass over each term's contiguous row.
+    std::array<F4, kPhi> row{};
+    for (int t = 0; t < m.n; ++t) {
+      const uint16_t* p = &values_[(size_t(m.row[size_t(t)]) * kNodes + size_t(i) * kPhi) * kValues];
+      const float w = m.w[size_t(t)];
+      for (int q = 0; q < kPhi; ++q) row[size_t(q)] += w * bf16x4(p + q * kValues);
     }
     const float om = cell_solid_angle(i);
     int j = 0;
     float v = 0;
     for (; j < kPhi; ++j) {
-      v = node_value(m, i * kPhi + j, cr, ct) * om;
+      const F4& r = row[size_t(j)];
+      v = (r[0] + m.cr * r[1] + m.ct * r[2]) * om;
       if (target < v || j == kPhi - 1) break;
       target -= v;
     }
@@ -303,7 +328,7 @@ bool TableBsdf::sample(const Mix& m, float cr, float ct, float u0, float u1, flo
   }
   const float s = std::sqrt(std::max(0.0f, 1 - z * z));
   wi = k::kv3(s * std::cos(ph), s * std::sin(ph), z);
-  pdf_out = pdf(m, wi, cr, ct);
+  pdf_out = pdf(m, wi);
   return pdf_out > 0;
 }
 

@@ -85,7 +85,7 @@ TEST(TableBsdf, NodesHoldTheNearFieldShadingOfTheirClass) {
       const std::array<double, 3> ref = shading_mean(mat, slot, wo, wl, 20000);
       float w[FootprintTable::kClasses] = {};
       w[slot] = 1;
-      const Vec3 got = tb->eval(tb->mix(w, wo), wl, kd, kd);
+      const Vec3 got = tb->eval(tb->mix(w, wo, 0.35f, 0.35f), wl, kd, kd);
       const std::array<float, 4> stored = tb->value(slot, view, light);
       // The red channel as the renderer forms it, and the stored parts.
       const double want = ref[0] + (ref[1] + ref[2]) * kd.x;
@@ -115,7 +115,7 @@ TEST(TableBsdf, SamplingDensityIntegratesToOneAndItsSamplesFollowIt) {
   const float cr = (kd.x + kd.y + kd.z) / 3;
   float w[FootprintTable::kClasses] = {0.3f, 0.7f};
   for (const Vec3 wo : {k::kv3_normalize(k::kv3(0.2f, -0.5f, 0.84f)), k::kv3_normalize(k::kv3(-0.7f, 0.1f, -0.3f))}) {
-    const TableBsdf::Mix m = tb->mix(w, wo);
+    const TableBsdf::Mix m = tb->mix(w, wo, cr, cr);
     ASSERT_GT(m.n, 0);
     // Midpoint quadrature over (cos theta, phi): the density's integral and
     // the integral of f |wi.z| (red).
@@ -126,7 +126,7 @@ TEST(TableBsdf, SamplingDensityIntegratesToOneAndItsSamplesFollowIt) {
         const double z = -1 + 2 * (i + 0.5) / nz, ph = 2 * M_PI * (j + 0.5) / np, s = std::sqrt(1 - z * z);
         const Vec3 d = k::kv3(float(s * std::cos(ph)), float(s * std::sin(ph)), float(z));
         const double dw = (2.0 / nz) * (2 * M_PI / np);
-        pdf_sum += tb->pdf(m, d, cr, cr) * dw;
+        pdf_sum += tb->pdf(m, d) * dw;
         f_sum += tb->eval(m, d, kd, kd).x * dw;
       }
     // The samples: E[f / pdf] is the integral of f.
@@ -137,9 +137,9 @@ TEST(TableBsdf, SamplingDensityIntegratesToOneAndItsSamplesFollowIt) {
     for (int i = 0; i < n; ++i) {
       Vec3 wi;
       float pdf = 0;
-      ASSERT_TRUE(tb->sample(m, cr, cr, u(rng), u(rng), u(rng), wi, pdf));
+      ASSERT_TRUE(tb->sample(m, u(rng), u(rng), u(rng), wi, pdf));
       ASSERT_NEAR(k::kv3_len(wi), 1.0f, 1e-4f);
-      ASSERT_FLOAT_EQ(pdf, tb->pdf(m, wi, cr, cr));
+      ASSERT_FLOAT_EQ(pdf, tb->pdf(m, wi));
       const double v = tb->eval(m, wi, kd, kd).x / pdf;
       est += v;
       est2 += v * v;

@@ -64,8 +64,13 @@ class TableBsdf {
     std::array<int32_t, kMaxTerms> row{};
     std::array<float, kMaxTerms> w{};
     std::array<float, FootprintTable::kClasses> share{};  // the classes' shares of the hits
+    // Sampling: the body colours' channel means, and the mix's sampling
+    // values (A + cr Br + ct Bt) summed over each theta row's cells times
+    // their solid angle, and over the sphere (at kTheta).
+    float cr = 0, ct = 0;
+    std::array<float, kTheta + 1> rows{};
   };
-  Mix mix(const float* slot_hits, Vec3 wo) const;
+  Mix mix(const float* slot_hits, Vec3 wo, float cr, float ct) const;
   // The same classes seen from another direction wo.
   void remix(Mix& m, Vec3 wo) const;
 
@@ -76,14 +81,13 @@ class TableBsdf {
   Vec3 eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total = nullptr) const;
   // The sampling density of sample() (solid angle): piecewise constant per
   // light node's cell, in proportion to the mix's total (lit and shadowed)
-  // there with the colours' means cr, ct, blended with a uniform share of
-  // the sphere.
-  float pdf(const Mix& m, Vec3 wi, float cr, float ct) const;
+  // there with the mix's colour means, blended with a uniform share of the
+  // sphere.
+  float pdf(const Mix& m, Vec3 wi) const;
   // A direction from pdf() with three uniform numbers; false when the mix
   // is empty. Sets wi, its density and, when asked, a fourth uniform number
   // left over from u0's choices.
-  bool sample(const Mix& m, float cr, float ct, float u0, float u1, float u2, Vec3& wi, float& pdf,
-              float* u_rest = nullptr) const;
+  bool sample(const Mix& m, float u0, float u1, float u2, Vec3& wi, float& pdf, float* u_rest = nullptr) const;
 
   // Share of sample() drawn uniformly over the sphere (covers every
   // direction where the tabulated value is not zero).
@@ -109,10 +113,7 @@ class TableBsdf {
   static int cell_of(Vec3 d);
   static float cell_solid_angle(int theta_row);
   // The mix's sampling value at light node l (A + cr Br + ct Bt).
-  float node_value(const Mix& m, int l, float cr, float ct) const;
-  // The mix's sampling values summed over the solid angle of each theta
-  // row (kTheta) and over the sphere.
-  float row_total(const Mix& m, int theta_row, float cr, float ct) const;
+  float node_value(const Mix& m, int l) const;
 
   static constexpr int kValues = 4;
   int slots_ = 0;
