@@ -82,21 +82,6 @@ Vec3 TableBsdf::node_direction(int node) {
   return k::kv3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
 }
 
-TableBsdf::Corners TableBsdf::corners(Vec3 d) {
-  float th, ph;
-  angles(d, th, ph);
-  const float ft = std::clamp(th / kDTheta, 0.0f, float(kTheta - 1));
-  const int i0 = std::min(int(ft), kTheta - 1), i1 = std::min(i0 + 1, kTheta - 1);
-  const float wt = ft - float(i0);
-  const float fp = ph / kDPhi;
-  const int j0 = std::min(int(fp), kPhi - 1), j1 = (j0 + 1) % kPhi;
-  const float wp = std::clamp(fp - float(j0), 0.0f, 1.0f);
-  Corners c;
-  c.node = {i0 * kPhi + j0, i0 * kPhi + j1, i1 * kPhi + j0, i1 * kPhi + j1};
-  c.w = {(1 - wt) * (1 - wp), (1 - wt) * wp, wt * (1 - wp), wt * wp};
-  return c;
-}
-
 int TableBsdf::cell_of(Vec3 d) {
   float th, ph;
   angles(d, th, ph);
@@ -228,7 +213,7 @@ TableBsdf::Mix TableBsdf::mix(const float* slot_hits, Vec3 wo, float cr, float c
 
 void TableBsdf::remix(Mix& m, Vec3 wo) const {
   m.n = 0;
-  const Corners c = corners(wo);
+  const SphereNodes c = sphere_nodes(wo, kTheta, kPhi);
   for (int s = 0; s < slots_; ++s) {
     const float share = m.share[size_t(s)];
     if (!(share > 0)) continue;
@@ -251,7 +236,7 @@ void TableBsdf::remix(Mix& m, Vec3 wo) const {
 }
 
 Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total) const {
-  const Corners c = corners(wi);
+  const SphereNodes c = sphere_nodes(wi, kTheta, kPhi);
   // Sums of the lit parts (A, Br, Bt times the lit share) and, when asked,
   // of the parts themselves, four lanes at a time.
   F4 lit{}, all{};

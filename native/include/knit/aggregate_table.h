@@ -59,6 +59,16 @@ inline float atan2_approx(float y, float x) {
   return y < 0 ? -r : r;
 }
 
+// The four nodes around unit direction d on a (theta, phi) grid over the
+// whole sphere, theta nodes i pi / (theta_nodes - 1), phi nodes
+// j 2 pi / phi_nodes (node = i phi_nodes + j), and their bilinear weights:
+// the direction grids of the class table and of its tabulated BSDF.
+struct SphereNodes {
+  std::array<int, 4> node;
+  std::array<float, 4> w;
+};
+SphereNodes sphere_nodes(Vec3 d, int theta_nodes, int phi_nodes);
+
 // std::lround for a count or mean that is >= 0 and far below 2^31: the
 // same value (in double, v + 0.5 is exact and truncation is the floor),
 // without libm's call (0.5% of a multi-scale render's instructions).
@@ -162,11 +172,8 @@ class FootprintTable {
 
  private:
   // The four grid nodes around a direction and their bilinear weights.
-  struct DirWeights {
-    std::array<int, 4> node;  // theta * kPhiBins + phi
-    std::array<float, 4> w;
-  };
-  static DirWeights dir_weights(Vec3 wi_local);
+  using DirWeights = SphereNodes;  // node = theta * kPhiBins + phi
+  static DirWeights dir_weights(Vec3 wi_local) { return sphere_nodes(wi_local, kThetaBins, kPhiBins); }
   // A node's statistics as the table keeps them, kMoments floats: the hit
   // fraction, then the hit-conditioned means times the hit fraction (so
   // that any mix of nodes and classes is one weighted sum, its hit-weighted

@@ -102,12 +102,6 @@ class TableBsdf {
   static Vec3 node_direction(int node);
 
  private:
-  // The four grid nodes around a direction and their bilinear weights.
-  struct Corners {
-    std::array<int, 4> node;
-    std::array<float, 4> w;
-  };
-  static Corners corners(Vec3 d);
   // The light node whose cell (theta and phi within half a node spacing)
   // holds d, and the solid angle of a row's cells.
   static int cell_of(Vec3 d);
