@@ -576,23 +576,26 @@ k::KnitAggregate FootprintTable::aggregate(const KnitSurface& surface, const k::
   return a;
 }
 
-float FootprintTable::pass_of(const std::array<double, kClasses>& counts, const DirWeights& dw) const {
+float FootprintTable::pass_of(const std::array<double, kClasses>& counts, const DirWeights& dw,
+                              float* slot_hits) const {
   double cells = 0, hits = 0;
   for (int slot = 0; slot < slots_; ++slot) {
     const double n = counts[size_t(class_of_slot_[size_t(slot)])];
     if (!(n > 0)) continue;
     cells += n;
-    hits += n * double(slot_hit_fraction(slot, dw));
+    const float h = slot_hit_fraction(slot, dw);
+    hits += n * double(h);
+    if (slot_hits) slot_hits[slot] = float(n) * h;  // (any scale)
   }
   return pass_fraction(hits, cells);
 }
 
-float FootprintTable::p_delta(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi) const {
+float FootprintTable::p_delta(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi, float* slot_hits) const {
   const DirWeights dw = dir_weights(wi);
   std::array<double, kClasses> counts;
   if (!class_counts(f, counts))
     for_each_cell(surface, f, [&](int cls, int, int) { counts[size_t(cls)] += 1; });
-  return pass_of(counts, dw);
+  return pass_of(counts, dw, slot_hits);
 }
 
 namespace {
@@ -762,15 +765,18 @@ k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, float
   return a;
 }
 
-float FootprintTable::p_delta_sub(const KnitSurface& surface, float x, float y, float ex, float ey,
-                                  Vec3 wi) const {
+float FootprintTable::p_delta_sub(const KnitSurface& surface, float x, float y, float ex, float ey, Vec3 wi,
+                                  float* slot_hits) const {
   const SubAreas sa = sub_areas(surface.geom(), x, y, ex, ey, "p_delta_sub");
   if (!(sa.total > 0)) return 1;
   const DirWeights dw = dir_weights(wi);
   double hits = 0;
   for (int ps = 0; ps < slots_ * kSub * kSub; ++ps)
-    if (sa.area[size_t(ps)] > 0)
-      hits += double(float(sa.area[size_t(ps)] / sa.total)) * double(sub_hit_fraction(ps, dw));
+    if (sa.area[size_t(ps)] > 0) {
+      const float share = float(sa.area[size_t(ps)] / sa.total), h = sub_hit_fraction(ps, dw);
+      hits += double(share) * double(h);
+      if (slot_hits) slot_hits[ps / (kSub * kSub)] += share * h;
+    }
   return std::clamp(float(1 - hits), 0.0f, 1.0f);
 }
 

@@ -271,6 +271,41 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
 
   Vec3 fx, fy, e;
   const Route rt = route(hit, fx, fy, e);
+  if (rt != Route::NearField && table_bsdf_ && rt != Route::Marched && table_->one_colour()) {
+    // The tabulated BSDF of a footprint of one colour index needs only the
+    // hit fractions: its p_delta and each class's share of its hits (the
+    // aggregate's means would go unused). Shaded at the base hit.
+    std::array<float, FootprintTable::kClasses> slot_hits{};
+    float p;
+    if (rt == Route::SubCells) {
+      p = table_->p_delta_sub(surface_, x, y, e.x, e.y, wi, slot_hits.data());
+      sh.from_sub_cells = true;
+    } else {
+      const k::KFootprint f =
+          k::knit_footprint(surface_.geom(), x, y, fx, fy, footprint_points_for(fx, fy), shift[0], shift[1]);
+      p = table_->p_delta(surface_, f, wi, slot_hits.data());
+    }
+    sh.from_table = true;
+    sh.steps = 0;
+    sh.point.p_delta = p;
+    if (!(p < 1)) return sh;
+    set_colors(sh, 0);
+    sh.mix = table_bsdf_->mix(slot_hits.data(), wi, (sh.kd_r.r + sh.kd_r.g + sh.kd_r.b) / 3,
+                              (sh.kd_t.r + sh.kd_t.g + sh.kd_t.b) / 3);
+    if (sh.mix.n > 0) {
+      sh.pass_through = false;
+      sh.point.layers = 1;
+      sh.point.shadow = mean_shadow_;
+      sh.table_bsdf = table_bsdf_.get();
+      sh.st = hit.t;
+      sh.sb = hit.b;
+      sh.sn = hit.n;
+      sh.offset = k::kv3(0, 0, 0);
+      return sh;
+    }
+    sh = unshaded();  // (no class with hits to weigh: the aggregate below)
+    sh.from_back = wi.z < 0;
+  }
   if (rt != Route::NearField) {
     k::KnitAggregate a;
     // (the points only for the whole cells' and the marched footprints)

@@ -108,8 +108,11 @@ class FootprintTable {
   // share of cells of that class times its hit fraction (TableBsdf::mix).
   k::KnitAggregate aggregate(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi_local,
                              float* slot_hits = nullptr) const;
-  // Only its p_delta (shadow rays).
-  float p_delta(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi_local) const;
+  // Only its p_delta (shadow rays; and with slot_hits, zeroed by the
+  // caller, the per-slot hits as aggregate gives them, up to scale: all a
+  // footprint of one colour index shaded with the tabulated BSDF needs).
+  float p_delta(const KnitSurface& surface, const k::KFootprint& f, Vec3 wi_local,
+                float* slot_hits = nullptr) const;
 
   // Footprints of half a cell or more (docs/multiscale.md, "Footprints
   // below a cell: sub-cells"): the table also keeps each class's statistics
@@ -129,7 +132,8 @@ class FootprintTable {
   // hit fractions, summed.
   k::KnitAggregate aggregate_sub(const KnitSurface& surface, float x, float y, float ex, float ey, Vec3 wi_local,
                                  float pick = 0.5f, float* slot_hits = nullptr) const;
-  float p_delta_sub(const KnitSurface& surface, float x, float y, float ex, float ey, Vec3 wi_local) const;
+  float p_delta_sub(const KnitSurface& surface, float x, float y, float ex, float ey, Vec3 wi_local,
+                    float* slot_hits = nullptr) const;
   // The per-sub-cell statistics (kMoments floats per class present,
   // sub-cell and direction node, as stored: rounded to bfloat16; the
   // neighbour shares zero for a pattern of one colour index), for tests.
@@ -266,7 +270,7 @@ class FootprintTable {
   // Whether class_counts can count (one class, or prefix counts).
   bool can_count() const { return single_class_ >= 0 || !prefix_.empty(); }
   // p_delta of cells counted by class (1 for none), seen from direction d.
-  float pass_of(const std::array<double, kClasses>& counts, const DirWeights& d) const;
+  float pass_of(const std::array<double, kClasses>& counts, const DirWeights& d, float* slot_hits = nullptr) const;
 
   std::array<int, kClasses> slot_{};  // index into moments_ blocks, -1 when the class is absent
   int slots_ = 0;                     // classes present
