@@ -1175,7 +1175,11 @@ with self_shadowing, where the renderer traces those tubes), shadow (G_{p,f}), p
 through; near field 0), kd_r, kd_t ((N, 3) body colours; multi-scale: mixed
 over the footprint), alpha ((N, 4): specular reflection alpha_x, alpha_y,
 specular transmission alpha_x, alpha_y; multi-scale: LEAN-widened), steps
-(CAPM segments marched, summed over footprint points). Rows with
+(CAPM segments marched, summed over footprint points). A footprint read
+from the class table with table_bsdf (the default) is shaded by its
+tabulated BSDF in the base's frame: st, sb, sn are the base frame, offset
+is 0 (shaded at the base hit), layers 1 and alpha the yarn's own
+roughness (the renderer does not use them there). Rows with
 pass_through have no shading point: st, sb, sn, offset, shadow, kd_r, kd_t,
 alpha are nan, color -1, layers 0, and p_delta 1 (so p_delta equals
 transmittance() in every row). In multi-scale mode, a footprint below a
