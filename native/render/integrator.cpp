@@ -160,7 +160,9 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
       LightSample ls;
       if (light && light->sample(si.p, ul, ls) && ls.pdf > 0 && !ls.li.is_black()) {
         const Vec3 wi_l = si.shading.to_local(ls.wi);
-        const Rgb f = m.eval(si, wo_l, wi_l);
+        const bool mis = !ls.delta && strategy == Strategy::Mis;
+        float bsdf_pdf = -1;  // (set by materials that evaluate it with f)
+        const Rgb f = m.eval_pdf(si, wo_l, wi_l, mis, bsdf_pdf);
         const bool geo_reflect = dot(ls.wi, si.ng) * dot(wo, si.ng) > 0;
         const bool sh_reflect = wi_l.z * wo_l.z > 0;
         if (!f.is_black() && (resolves || geo_reflect == sh_reflect)) {
@@ -196,7 +198,7 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
             if (!tr.is_black()) {
               float w = 1.0f;
               if (!ls.delta && strategy == Strategy::Mis)
-                w = power_heuristic(sel * ls.pdf, m.pdf(si, wo_l, wi_l));
+                w = power_heuristic(sel * ls.pdf, bsdf_pdf >= 0 ? bsdf_pdf : m.pdf(si, wo_l, wi_l));
               radiance += beta * f * tr * ls.li * (std::fabs(wi_l.z) * w / (sel * ls.pdf));
             }
           }

@@ -94,6 +94,12 @@ class Material {
 
   virtual Rgb eval(const SurfaceInteraction& si, Vec3 wo, Vec3 wi) const = 0;
   virtual float pdf(const SurfaceInteraction& si, Vec3 wo, Vec3 wi) const = 0;
+  // eval; a material that can share the work also sets pdf_out to
+  // pdf(si, wo, wi) when want_pdf (light sampling's MIS weight), else it
+  // leaves pdf_out as it is (the caller asks pdf() when it needs it).
+  virtual Rgb eval_pdf(const SurfaceInteraction& si, Vec3 wo, Vec3 wi, bool /*want_pdf*/, float& /*pdf_out*/) const {
+    return eval(si, wo, wi);
+  }
   virtual bool sample(const SurfaceInteraction& si, Vec3 wo, float uc, Vec2 u, BsdfSample& s) const = 0;
 };
 

@@ -36,6 +36,18 @@ float YarnShadedMaterial::pdf(const SurfaceInteraction& si, Vec3 wo, Vec3 wi) co
   return knit::k::yarn_bsdf_pdf(si.yarn.bsdf, to_kvec(wo), to_kvec(wi));
 }
 
+Rgb YarnShadedMaterial::eval_pdf(const SurfaceInteraction& si, Vec3 wo, Vec3 wi, bool want_pdf,
+                                 float& pdf_out) const {
+  if (!want_pdf || !si.yarn.table || !si.yarn.active || !usable(wo) || !usable(wi) || wi.z == 0.0f)
+    return eval(si, wo, wi);
+  knit::k::kvec3 total;
+  const knit::k::kvec3 lit = table_eval(si.yarn, wi, &total);
+  const float q = lum(total) > 0 ? std::min(1.0f, lum(lit) / lum(total)) : 0.0f;
+  pdf_out = q * si.yarn.table->pdf(si.yarn.mix, to_kvec(wi));
+  const float inv = 1.0f / std::fabs(wi.z);
+  return {lit.x * inv, lit.y * inv, lit.z * inv};
+}
+
 bool YarnShadedMaterial::sample(const SurfaceInteraction& si, Vec3 wo, float uc, Vec2 u, BsdfSample& s) const {
   if (!si.yarn.active || !usable(wo)) return false;
   if (si.yarn.table) {

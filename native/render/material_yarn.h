@@ -21,6 +21,8 @@ class YarnShadedMaterial : public Material {
   // f(wo, wi) without the cosine (the kernel's eval includes it).
   Rgb eval(const SurfaceInteraction& si, Vec3 wo, Vec3 wi) const override;
   float pdf(const SurfaceInteraction& si, Vec3 wo, Vec3 wi) const override;
+  // The class table's tabulated BSDF evaluates once for both.
+  Rgb eval_pdf(const SurfaceInteraction& si, Vec3 wo, Vec3 wi, bool want_pdf, float& pdf_out) const override;
   // The yarn BSDF uses u (lobe choice and direction); the class table's
   // tabulated BSDF uses uc too (its cell, then the direction in it).
   bool sample(const SurfaceInteraction& si, Vec3 wo, float uc, Vec2 u, BsdfSample& s) const override;
