@@ -99,8 +99,9 @@ TEST(TableBsdf, NodesHoldTheNearFieldShadingOfTheirClass) {
       ++n;
     }
   std::printf("[table-bsdf] mean relative error %.3f, worst %.3f over %d node pairs\n", sum / n, worst, n);
-  // 256 rays per node, 64 of them marched for the lit share: about 10% of
-  // sampling error per node (measured 2026-11-24: mean 0.108, worst 0.223),
+  // 512 rays per node, 64 of them marched for the lit share: several
+  // percent of sampling error per node (measured 2026-11-24: mean 0.062,
+  // worst 0.231; with 256 rays mean 0.108, worst 0.223),
   // which a render's bilinear mix of 16 node pairs and its classes averages
   // down. Without the shadows (lit share 1) the errors are 30-80%.
   EXPECT_LT(sum / n, 0.15);

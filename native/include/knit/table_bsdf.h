@@ -52,8 +52,8 @@ class TableBsdf {
   // march_stride of them (a stratified prefix of the rays' net)
   // shadow-marched there too: V enters as the lit share of f over those.
   // Every core.
-  TableBsdf(const KnitMaterial& material, const FootprintTable& table, int hits_per_view = 256,
-            int march_stride = 4);
+  TableBsdf(const KnitMaterial& material, const FootprintTable& table, int hits_per_view = 512,
+            int march_stride = 8);
 
   // A footprint's shading seen from wo (fabric frame, unit, either side):
   // the (class, view node) rows to mix and their weights. `slot_hits`
