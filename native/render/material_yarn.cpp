@@ -53,8 +53,7 @@ bool YarnShadedMaterial::sample(const SurfaceInteraction& si, Vec3 wo, float uc,
   if (si.yarn.table) {
     // A direction from the total (lit and shadowed), then whether it leaves
     // the fabric (the lit share) or meets other yarn of the footprint
-    // first: the path then scatters there (Material::bounce_table). Either
-    // way the weight is total / pdf.
+    // first: the path then scatters there (Material::bounce_table).
     knit::k::kvec3 wi;
     float pdf = 0, u3 = 0;
     if (!si.yarn.table->sample(si.yarn.mix, uc, u.x, u.y, wi, pdf, &u3) ||
@@ -65,8 +64,12 @@ bool YarnShadedMaterial::sample(const SurfaceInteraction& si, Vec3 wo, float uc,
     const float q = lum(total) > 0 ? std::min(1.0f, lum(lit) / lum(total)) : 0.0f;
     s.internal = !(u3 < q);
     s.wi = from_kvec(wi);
-    s.weight = Rgb(total.x / pdf, total.y / pdf, total.z / pdf);
+    // The branch's part over its probability: lit / (pdf q) leaving, the
+    // shadowed rest / (pdf (1 - q)) inside (each channel exactly, though q
+    // is one number for the three).
     s.pdf = s.internal ? pdf * (1 - q) : pdf * q;
+    const knit::k::kvec3 part = s.internal ? knit::k::kv3_sub(total, lit) : lit;
+    s.weight = Rgb(std::max(0.0f, part.x) / s.pdf, std::max(0.0f, part.y) / s.pdf, std::max(0.0f, part.z) / s.pdf);
     s.flags = kGlossy | (wi.z * wo.z > 0 ? kReflection : kTransmission);
     s.eta = 1;
     return s.pdf > 0 && s.weight.is_finite();
