@@ -7,32 +7,38 @@ namespace knit::render {
 namespace {
 bool usable(Vec3 w) { return is_finite(w) && std::fabs(length2(w) - 1.0f) < 1e-3f; }
 
-// The tabulated BSDF of a class-table footprint: f |wi.z|, and its
-// sampling weights' colours (the channel means of the body colours).
-knit::k::kvec3 table_eval(const YarnShading& y, Vec3 wi, knit::k::kvec3* total = nullptr) {
-  return y.table->eval(y.mix, to_kvec(wi), y.bsdf.kd_r, y.bsdf.kd_t, total);
+// The tabulated BSDF of a class-table footprint towards wi, from one
+// lookup: f |wi.z| of the light that reaches the yarn (lit) and of all of
+// it (total), sample()'s density there, and the lit share q of the total
+// (one number for the three channels), which leaves the fabric; the rest
+// meets other yarn of the footprint first (Material::bounce_table).
+struct TableAt {
+  knit::k::kvec3 lit, total;
+  float density = 0, q = 0;
+  // The density of sampling wi as a direction that leaves the fabric.
+  float leaving_pdf() const { return q * density; }
+};
+TableAt table_at(const YarnShading& y, Vec3 wi) {
+  TableAt t;
+  t.lit = y.table->eval(y.mix, to_kvec(wi), y.bsdf.kd_r, y.bsdf.kd_t, &t.total, &t.density);
+  const float lt = t.lit.x + t.lit.y + t.lit.z, tt = t.total.x + t.total.y + t.total.z;
+  t.q = tt > 0 ? std::min(1.0f, lt / tt) : 0.0f;
+  return t;
 }
-float lum(knit::k::kvec3 c) { return c.x + c.y + c.z; }
 }  // namespace
 
 Rgb YarnShadedMaterial::eval(const SurfaceInteraction& si, Vec3 wo, Vec3 wi) const {
   if (!si.yarn.active || !usable(wo) || !usable(wi) || wi.z == 0.0f) return {};
   const knit::k::kvec3 f =
-      si.yarn.table ? table_eval(si.yarn, wi) : knit::k::yarn_bsdf_eval(si.yarn.bsdf, to_kvec(wo), to_kvec(wi));
+      si.yarn.table ? si.yarn.table->eval(si.yarn.mix, to_kvec(wi), si.yarn.bsdf.kd_r, si.yarn.bsdf.kd_t)
+                    : knit::k::yarn_bsdf_eval(si.yarn.bsdf, to_kvec(wo), to_kvec(wi));
   const float inv = 1.0f / std::fabs(wi.z);
   return {f.x * inv, f.y * inv, f.z * inv};
 }
 
 float YarnShadedMaterial::pdf(const SurfaceInteraction& si, Vec3 wo, Vec3 wi) const {
   if (!si.yarn.active || !usable(wo) || !usable(wi)) return 0;
-  if (si.yarn.table) {
-    // The density of sampling wi as a direction that leaves the fabric:
-    // sample()'s density times the lit share there.
-    knit::k::kvec3 total;
-    const knit::k::kvec3 lit = table_eval(si.yarn, wi, &total);
-    const float q = lum(total) > 0 ? std::min(1.0f, lum(lit) / lum(total)) : 0.0f;
-    return q * si.yarn.table->pdf(si.yarn.mix, to_kvec(wi));
-  }
+  if (si.yarn.table) return table_at(si.yarn, wi).leaving_pdf();
   return knit::k::yarn_bsdf_pdf(si.yarn.bsdf, to_kvec(wo), to_kvec(wi));
 }
 
@@ -40,12 +46,10 @@ Rgb YarnShadedMaterial::eval_pdf(const SurfaceInteraction& si, Vec3 wo, Vec3 wi,
                                  float& pdf_out) const {
   if (!want_pdf || !si.yarn.table || !si.yarn.active || !usable(wo) || !usable(wi) || wi.z == 0.0f)
     return eval(si, wo, wi);
-  knit::k::kvec3 total;
-  const knit::k::kvec3 lit = table_eval(si.yarn, wi, &total);
-  const float q = lum(total) > 0 ? std::min(1.0f, lum(lit) / lum(total)) : 0.0f;
-  pdf_out = q * si.yarn.table->pdf(si.yarn.mix, to_kvec(wi));
+  const TableAt t = table_at(si.yarn, wi);
+  pdf_out = t.leaving_pdf();
   const float inv = 1.0f / std::fabs(wi.z);
-  return {lit.x * inv, lit.y * inv, lit.z * inv};
+  return {t.lit.x * inv, t.lit.y * inv, t.lit.z * inv};
 }
 
 bool YarnShadedMaterial::sample(const SurfaceInteraction& si, Vec3 wo, float uc, Vec2 u, BsdfSample& s) const {
@@ -55,20 +59,16 @@ bool YarnShadedMaterial::sample(const SurfaceInteraction& si, Vec3 wo, float uc,
     // the fabric (the lit share) or meets other yarn of the footprint
     // first: the path then scatters there (Material::bounce_table).
     knit::k::kvec3 wi;
-    float pdf = 0, u3 = 0;
-    if (!si.yarn.table->sample(si.yarn.mix, uc, u.x, u.y, wi, pdf, &u3) ||
-        wi.z == 0.0f)
-      return false;
-    knit::k::kvec3 total;
-    const knit::k::kvec3 lit = table_eval(si.yarn, from_kvec(wi), &total);
-    const float q = lum(total) > 0 ? std::min(1.0f, lum(lit) / lum(total)) : 0.0f;
-    s.internal = !(u3 < q);
+    float u3 = 0;
+    if (!si.yarn.table->sample(si.yarn.mix, uc, u.x, u.y, wi, nullptr, &u3) || wi.z == 0.0f) return false;
+    const TableAt t = table_at(si.yarn, from_kvec(wi));
+    s.internal = !(u3 < t.q);
     s.wi = from_kvec(wi);
     // The branch's part over its probability: lit / (pdf q) leaving, the
     // shadowed rest / (pdf (1 - q)) inside (each channel exactly, though q
     // is one number for the three).
-    s.pdf = s.internal ? pdf * (1 - q) : pdf * q;
-    const knit::k::kvec3 part = s.internal ? knit::k::kv3_sub(total, lit) : lit;
+    s.pdf = s.internal ? t.density * (1 - t.q) : t.leaving_pdf();
+    const knit::k::kvec3 part = s.internal ? knit::k::kv3_sub(t.total, t.lit) : t.lit;
     s.weight = Rgb(std::max(0.0f, part.x) / s.pdf, std::max(0.0f, part.y) / s.pdf, std::max(0.0f, part.z) / s.pdf);
     s.flags = kGlossy | (wi.z * wo.z > 0 ? kReflection : kTransmission);
     s.eta = 1;

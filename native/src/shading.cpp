@@ -271,7 +271,7 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
 
   Vec3 fx, fy, e;
   const Route rt = route(hit, fx, fy, e);
-  if (rt != Route::NearField && table_bsdf_ && rt != Route::Marched && table_->one_colour()) {
+  if (table_bsdf_ && (rt == Route::Cells || rt == Route::SubCells) && table_->one_colour()) {
     // The tabulated BSDF of a footprint of one colour index needs only the
     // hit fractions: its p_delta and each class's share of its hits (the
     // aggregate's means would go unused). Shaded at the base hit.
@@ -290,16 +290,10 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     sh.point.p_delta = p;
     if (!(p < 1)) return sh;
     set_colors(sh, 0);
-    sh.mix = table_bsdf_->mix(slot_hits.data(), wi, (sh.kd_r.r + sh.kd_r.g + sh.kd_r.b) / 3,
-                              (sh.kd_t.r + sh.kd_t.g + sh.kd_t.b) / 3);
-    if (sh.mix.n > 0) {
+    if (use_table_bsdf(hit, wi, slot_hits.data(), sh)) {
       sh.pass_through = false;
       sh.point.layers = 1;
       sh.point.shadow = mean_shadow_;
-      sh.table_bsdf = table_bsdf_.get();
-      sh.st = hit.t;
-      sh.sb = hit.b;
-      sh.sn = hit.n;
       sh.offset = k::kv3(0, 0, 0);
       return sh;
     }
@@ -347,20 +341,10 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     } else {
       mix_colors(sh, a.color_w);
     }
-    if (mix_out) {
-      // The tabulated BSDF, in the base's frame (fabric x, y, front normal).
-      sh.table_bsdf = table_bsdf_.get();
-      sh.mix = table_bsdf_->mix(slot_hits.data(), wi, (sh.kd_r.r + sh.kd_r.g + sh.kd_r.b) / 3,
-                                (sh.kd_t.r + sh.kd_t.g + sh.kd_t.b) / 3);
-      if (sh.mix.n > 0) {
-        sh.st = hit.t;
-        sh.sb = hit.b;
-        sh.sn = hit.n;
-        const Vec3 d = k::kv3_sub(a.position, k::kv3(x, y, top));
-        sh.offset = k::kv3_scale(to_world(d, hit.t, hit.b, hit.n), 1.0f / S);
-        return sh;
-      }
-      sh.table_bsdf = nullptr;  // (hits too few to weigh: the lobes below)
+    if (mix_out && use_table_bsdf(hit, wi, slot_hits.data(), sh)) {
+      const Vec3 d = k::kv3_sub(a.position, k::kv3(x, y, top));
+      sh.offset = k::kv3_scale(to_world(d, hit.t, hit.b, hit.n), 1.0f / S);
+      return sh;
     }
     // Shading frame: mean normal, mean tangent made orthogonal to it; then the
     // LEAN covariance, rotated into that frame, widens the specular lobes.
@@ -501,6 +485,17 @@ float KnitMaterial::transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameP
   // Hit or miss only (a corrected hit stays a hit: knit_capm_correct keeps
   // the first one when the corrected segment misses).
   return march(hit, ray_dir, frame, true).state == KNIT_CAPM_HIT ? 0.0f : 1.0f;
+}
+
+bool KnitMaterial::use_table_bsdf(const BaseHit& hit, Vec3 wi, const float* slot_hits, KnitShade& sh) const {
+  sh.mix = table_bsdf_->mix(slot_hits, wi, (sh.kd_r.r + sh.kd_r.g + sh.kd_r.b) / 3,
+                            (sh.kd_t.r + sh.kd_t.g + sh.kd_t.b) / 3);
+  if (sh.mix.n == 0) return false;  // (no class with hits to weigh)
+  sh.table_bsdf = table_bsdf_.get();
+  sh.st = hit.t;  // the base's frame: fabric x, y and front normal
+  sh.sb = hit.b;
+  sh.sn = hit.n;
+  return true;
 }
 
 KnitShade KnitMaterial::point_shade(const BaseHit& hit, const k::KnitLineHit& h, bool from_back) const {

@@ -64,30 +64,33 @@ uint32_t hash32(uint32_t h) {
   return h;
 }
 
-// Theta and phi (in [0, 2 pi)) of a unit direction.
-void angles(Vec3 d, float& th, float& ph) {
-  th = atan2_approx(std::sqrt(d.x * d.x + d.y * d.y), d.z);
-  ph = atan2_approx(d.y, d.x);
-  if (ph < 0) ph += 2 * kPi;
-}
-
 // A direction in the frame (t, b, n): its components along them.
 Vec3 to_local(Vec3 w, Vec3 t, Vec3 b, Vec3 n) { return k::kv3(k::kv3_dot(w, t), k::kv3_dot(w, b), k::kv3_dot(w, n)); }
 
 }  // namespace
 
+YarnHitParts::YarnHitParts(const KnitMaterial& material, const k::KnitLineHit& h, Vec3 wo)
+    : sh_(material.point_shade(base_, h, wo.z < 0)) {
+  // Colours (1, 0, 0) and (0, 1, 0) put the two body lobes in channels x
+  // and y, the colour-free part in z.
+  sh_.kd_r = Rgb{1, 0, 0};
+  sh_.kd_t = Rgb{0, 1, 0};
+  bsdf_ = material.kernel_bsdf(sh_);
+  n_ = k::kv3_normalize(sh_.sn);
+  t_ = k::kv3_normalize(k::kv3_sub(sh_.st, k::kv3_scale(n_, k::kv3_dot(sh_.st, n_))));
+  b_ = k::kv3_cross(n_, t_);
+  wo_l_ = to_local(wo, t_, b_, n_);
+}
+
+Vec3 YarnHitParts::parts(Vec3 wi) const {
+  const Vec3 f = k::yarn_bsdf_eval(bsdf_, wo_l_, to_local(wi, t_, b_, n_));
+  return k::kv3(f.z, f.x - f.z, f.y - f.z);
+}
+
 Vec3 TableBsdf::node_direction(int node) {
   const int it = node / kPhi, ip = node % kPhi;
   const float th = float(it) * kDTheta, ph = float(ip) * kDPhi;
   return k::kv3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
-}
-
-int TableBsdf::cell_of(Vec3 d) {
-  float th, ph;
-  angles(d, th, ph);
-  const int i = std::clamp(int(th / kDTheta + 0.5f), 0, kTheta - 1);
-  const int j = int(ph / kDPhi + 0.5f) % kPhi;
-  return i * kPhi + j;
 }
 
 float TableBsdf::cell_solid_angle(int i) {
@@ -136,28 +139,17 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
                                                  capm.max_segment, capm.max_steps);
       if (st.state != KNIT_CAPM_HIT) continue;
       ++hits;
-      // The near field's shading of the point, on a flat base whose frame
-      // is pattern space itself; colours (1, 0, 0) and (0, 1, 0) put the
-      // two body lobes in channels x and y, the colour-free part in z.
-      BaseHit base;
-      KnitShade sh = material.point_shade(base, st.hit, wo.z < 0);
-      sh.kd_r = Rgb{1, 0, 0};
-      sh.kd_t = Rgb{0, 1, 0};
-      const k::KYarnBsdf bsdf = material.kernel_bsdf(sh);
-      const Vec3 n = k::kv3_normalize(sh.sn);
-      const Vec3 t = k::kv3_normalize(k::kv3_sub(sh.st, k::kv3_scale(n, k::kv3_dot(sh.st, n))));
-      const Vec3 b = k::kv3_cross(n, t);
-      const Vec3 wo_l = to_local(wo, t, b, n);
+      const YarnHitParts hp(material, st.hit, wo);
       const bool march = m < marches;  // the net's first points: stratified too
       for (int l = 0; l < kNodes; ++l) {
         if (is_pole_copy(l)) continue;
-        const Vec3 f = k::yarn_bsdf_eval(bsdf, wo_l, to_local(light[size_t(l)], t, b, n));
-        if (!(f.x > 0 || f.y > 0 || f.z > 0)) continue;
-        const double v[3] = {double(f.z), double(f.x - f.z), double(f.y - f.z)};
+        const Vec3 p = hp.parts(light[size_t(l)]);
+        if (!(p.x > 0 || p.y > 0 || p.z > 0)) continue;
+        const double v[3] = {double(p.x), double(p.y), double(p.z)};
         for (int c = 0; c < 3; ++c) all[size_t(l) * 3 + size_t(c)] += v[c];
         if (!march) continue;
         for (int c = 0; c < 3; ++c) marched[size_t(l) * 3 + size_t(c)] += v[c];
-        if (material.occluded_from(base, sh, light[size_t(l)], nullptr)) continue;
+        if (material.occluded_from(hp.base(), hp.shade(), light[size_t(l)], nullptr)) continue;
         for (int c = 0; c < 3; ++c) lit[size_t(l) * 3 + size_t(c)] += v[c];
       }
     }
@@ -235,7 +227,7 @@ void TableBsdf::remix(Mix& m, Vec3 wo) const {
   for (int i = 0; i <= kTheta; ++i) m.rows[size_t(i)] = sum[size_t(i)][0] + m.cr * sum[size_t(i)][1] + m.ct * sum[size_t(i)][2];
 }
 
-Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total) const {
+Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total, float* density_out) const {
   const SphereNodes c = sphere_nodes(wi, kTheta, kPhi);
   // Sums of the lit parts (A, Br, Bt times the lit share) and, when asked,
   // of the parts themselves, four lanes at a time.
@@ -254,6 +246,7 @@ Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total) c
                   v[0] + v[1] * kd_r.z + v[2] * kd_t.z);
   };
   if (total) *total = rgb(all);
+  if (density_out) *density_out = density(m, c);
   return rgb(lit);
 }
 
@@ -264,14 +257,17 @@ float TableBsdf::node_value(const Mix& m, int l) const {
   return v[0] + m.cr * v[1] + m.ct * v[2];
 }
 
-float TableBsdf::pdf(const Mix& m, Vec3 wi) const {
+float TableBsdf::pdf(const Mix& m, Vec3 wi) const { return density(m, sphere_nodes(wi, kTheta, kPhi)); }
+
+float TableBsdf::density(const Mix& m, const SphereNodes& c) const {
   constexpr float kUniformPdf = kUniform / (4 * kPi);
   const float total = m.rows[kTheta];
   if (!(total > 0)) return 1 / (4 * kPi);
-  return (1 - kUniform) * node_value(m, cell_of(wi)) / total + kUniformPdf;
+  const int q = int(std::max_element(c.w.begin(), c.w.end()) - c.w.begin());
+  return (1 - kUniform) * node_value(m, c.node[size_t(q)]) / total + kUniformPdf;
 }
 
-bool TableBsdf::sample(const Mix& m, float u0, float u1, float u2, Vec3& wi, float& pdf_out, float* u_rest) const {
+bool TableBsdf::sample(const Mix& m, float u0, float u1, float u2, Vec3& wi, float* pdf_out, float* u_rest) const {
   if (m.n == 0) return false;
   const float total = m.rows[kTheta];
   float z, ph;
@@ -313,8 +309,8 @@ bool TableBsdf::sample(const Mix& m, float u0, float u1, float u2, Vec3& wi, flo
   }
   const float s = std::sqrt(std::max(0.0f, 1 - z * z));
   wi = k::kv3(s * std::cos(ph), s * std::sin(ph), z);
-  pdf_out = pdf(m, wi);
-  return pdf_out > 0;
+  if (pdf_out) *pdf_out = pdf(m, wi);
+  return true;
 }
 
 }  // namespace knit

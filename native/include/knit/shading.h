@@ -193,6 +193,10 @@ class KnitMaterial {
   // Whether the class table's sub-cells serve a footprint of `extent`
   // cells (below a cell in some direction) at pattern point (x, y).
   bool sub_cells_serve(float x, float y, Vec3 extent) const;
+  // Shades sh with the tabulated BSDF: the mix of the classes' hits
+  // `slot_hits` seen from wi (colours already in sh), in the base's frame;
+  // false, sh's shading untouched, when no class has hits to weigh.
+  bool use_table_bsdf(const BaseHit& hit, Vec3 wi, const float* slot_hits, KnitShade& sh) const;
   void set_colors(KnitShade& sh, int color_index) const;
   // Palette mixed by a footprint's colour histogram (KNIT_MS_COLORS bins).
   void mix_colors(KnitShade& sh, const float* weights) const;
@@ -207,6 +211,25 @@ class KnitMaterial {
   float arc_per_t_ = 1;     // mean arc length of the yarn per unit of curve parameter
   float mean_shadow_ = 1;   // ply shadow averaged around and along the yarn
   KnitShade unshaded_;      // what unshaded() returns, set up once
+};
+
+// The near field's shading of one yarn hit h of `material` seen from wo, on
+// a flat base whose frame is pattern space, as TableBsdf sums it: parts(wi)
+// is f |wi.n| towards wi split into the colour-free part and the factors of
+// the two body colours (A, Br, Bt; the yarn BSDF is linear in them); base()
+// and shade() are what KnitMaterial::occluded_from marches from.
+class YarnHitParts {
+ public:
+  YarnHitParts(const KnitMaterial& material, const k::KnitLineHit& h, Vec3 wo);
+  Vec3 parts(Vec3 wi) const;
+  const BaseHit& base() const { return base_; }
+  const KnitShade& shade() const { return sh_; }
+
+ private:
+  BaseHit base_;
+  KnitShade sh_;
+  k::KYarnBsdf bsdf_{};
+  Vec3 t_{}, b_{}, n_{}, wo_l_{};
 };
 
 }  // namespace knit

@@ -77,17 +77,19 @@ class TableBsdf {
   // f(wo, wi) |wi.z| V(wi) of the mix towards wi (fabric frame, unit), per
   // channel, with body colours kd_r, kd_t: the light that reaches the
   // yarn points along wi. `total`, when given, receives f |wi.z| without
-  // V: the lit part and the part shadowed by other yarn together.
-  Vec3 eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total = nullptr) const;
+  // V: the lit part and the part shadowed by other yarn together; `density`
+  // receives pdf(m, wi) from the same direction lookup.
+  Vec3 eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total = nullptr, float* density = nullptr) const;
   // The sampling density of sample() (solid angle): piecewise constant per
   // light node's cell, in proportion to the mix's total (lit and shadowed)
   // there with the mix's colour means, blended with a uniform share of the
   // sphere.
   float pdf(const Mix& m, Vec3 wi) const;
   // A direction from pdf() with three uniform numbers; false when the mix
-  // is empty. Sets wi, its density and, when asked, a fourth uniform number
-  // left over from u0's choices.
-  bool sample(const Mix& m, float u0, float u1, float u2, Vec3& wi, float& pdf, float* u_rest = nullptr) const;
+  // is empty. Sets wi and, when asked, its density and a fourth uniform
+  // number left over from u0's choices.
+  bool sample(const Mix& m, float u0, float u1, float u2, Vec3& wi, float* pdf = nullptr,
+              float* u_rest = nullptr) const;
 
   // Share of sample() drawn uniformly over the sphere (covers every
   // direction where the tabulated value is not zero).
@@ -102,9 +104,10 @@ class TableBsdf {
   static Vec3 node_direction(int node);
 
  private:
-  // The light node whose cell (theta and phi within half a node spacing)
-  // holds d, and the solid angle of a row's cells.
-  static int cell_of(Vec3 d);
+  // The density of sample() in the cell of the node nearest to a
+  // direction (theta and phi within half a node spacing: the heaviest of
+  // its bilinear corners `c`), and the solid angle of a row's cells.
+  float density(const Mix& m, const SphereNodes& c) const;
   static float cell_solid_angle(int theta_row);
   // The mix's sampling value at light node l (A + cr Br + ct Bt).
   float node_value(const Mix& m, int l) const;
