@@ -13,19 +13,23 @@
 // light directions on a coarse (theta, phi) grid over the whole sphere, the
 // mean over the yarn points that the view rays hit of
 //
-//     f(wo, wi) |wi . n| V(wi)
+//     f(wo, wi) |wi . n|
 //
 // with the near field's own shading at each point (the yarn BSDF in the
-// point's ply frame, its ply shadow) and V its self-shadowing march towards
-// the light. The yarn BSDF is linear in the two body colours, so each pair
-// keeps three numbers: the colour-free part A and the factors Br and Bt of
-// the reflection and transmission colours, f |wi.z| = A + Br kd_r + Bt kd_t
-// per channel. Directions are in the fabric's frame (x along the pattern's
-// x, z its front normal); the aggregate is conditioned on a hit (the pass
-// through the gaps is the class table's p_delta). What it leaves out: light
-// scattered between yarns inside the shell (the near field's bounces), the
-// base's curvature, and the sub-cells' own shading (a footprint below a
-// cell mixes its classes' tables by the sub-cells' hit fractions).
+// point's ply frame, its ply shadow; YarnHitParts), and the share of it
+// that reaches the point: its self-shadowing march towards the light meets
+// no other yarn. The yarn BSDF is linear in the two body colours, so each
+// pair keeps four numbers: the colour-free part A and the factors Br and
+// Bt of the reflection and transmission colours, f |wi.z| = A + Br kd_r +
+// Bt kd_t per channel, and the lit share. Directions are in the fabric's
+// frame (x along the pattern's x, z its front normal); the aggregate is
+// conditioned on a hit (the pass through the gaps is the class table's
+// p_delta). The shadowed rest is light that meets other yarn of the
+// footprint first: the renderer's walk scatters it there again
+// (Material::bounce_table), taking that yarn as the footprint's classes
+// seen from the other way. What it leaves out: the base's curvature, and
+// the sub-cells' own shading (a footprint below a cell mixes its classes'
+// tables by the sub-cells' hit fractions).
 #pragma once
 
 #include <array>
@@ -116,8 +120,9 @@ class TableBsdf {
   int slots_ = 0;
   // [slot][view node][light node][A, Br, Bt, lit share] as bfloat16.
   std::vector<uint16_t> values_;
-  // [slot][view node][theta row][A, Br, Bt]: the values summed over the
-  // row's light nodes times their cells' solid angle (sample, pdf).
+  // [slot][view node][theta row, then the sphere][A, Br, Bt, unused]: the
+  // values summed over the row's light nodes times their cells' solid
+  // angle, and over all rows (sample, pdf; four floats for four lanes).
   std::vector<float> rows_;
   double seconds_ = 0;
 };
