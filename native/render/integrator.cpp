@@ -33,6 +33,16 @@ Rgb PathIntegrator::shadow_transmittance(Vec3 origin, Vec3 dir, float tmax, Path
     r.tmax = tmax;
     return scene_.accel().occluded(r) ? Rgb() : Rgb(1.0f);
   }
+  {
+    // Most shadow rays meet nothing at all: Embree's any-hit test settles
+    // those at a fraction of the closest-hit walk below.
+    ++stats.shadow_rays;
+    Ray r;
+    r.o = origin;
+    r.d = dir;
+    r.tmax = tmax;
+    if (!scene_.accel().occluded(r)) return Rgb(1.0f);
+  }
   const bool finite = std::isfinite(tmax);
   const Vec3 end = finite ? origin + dir * tmax : Vec3();
   Rgb tr(1.0f);
@@ -80,6 +90,15 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
     return power_heuristic(state.bsdf_pdf, light_pdf);
   };
 
+  // The last vertex's light sample, its shadow once traced (nee.tr, zero
+  // when blocked or never traced), for the walk's vertices after it.
+  struct NeeSample {
+    bool valid = false, traced = false;
+    float sel = 0;
+    LightSample ls;
+    Rgb tr;
+  } nee;
+  bool walk = false;  // this vertex is the class table's walk from the last (bounce_table)
   SurfaceInteraction si;
   bool inside = false;  // si was found by a bounce inside the last hit's shell (Material::bounce_inside)
   for (;;) {
@@ -151,21 +170,33 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
     }
     if (depth >= settings_.max_depth) break;
 
-    // Next-event estimation.
+    // Next-event estimation. A vertex of the class table's walk lies at the
+    // vertex before it: it reuses that vertex's light sample and, once
+    // traced, its shadow (the sample does not depend on the walk's
+    // directions, so each vertex's estimate stays unbiased), and costs no
+    // light sample or shadow ray of its own.
+    const bool walked = walk;
+    walk = false;
     if (strategy != Strategy::Bsdf && m.has_smooth_lobes() && !lights.empty()) {
-      float sel = 0;
-      size_t index = 0;
-      const Light* light = lights.pick(sampler.get1d(), sel, index);
-      const Vec2 ul = sampler.get2d();
-      LightSample ls;
-      if (light && light->sample(si.p, ul, ls) && ls.pdf > 0 && !ls.li.is_black()) {
+      if (!walked) {
+        nee = NeeSample{};
+        size_t index = 0;
+        const Light* light = lights.pick(sampler.get1d(), nee.sel, index);
+        const Vec2 ul = sampler.get2d();
+        nee.valid = light && light->sample(si.p, ul, nee.ls) && nee.ls.pdf > 0 && !nee.ls.li.is_black();
+      }
+      const LightSample& ls = nee.ls;
+      const float sel = nee.sel;
+      if (nee.valid) {
         const Vec3 wi_l = si.shading.to_local(ls.wi);
         const bool mis = !ls.delta && strategy == Strategy::Mis;
         float bsdf_pdf = -1;  // (set by materials that evaluate it with f)
         const Rgb f = m.eval_pdf(si, wo_l, wi_l, mis, bsdf_pdf);
         const bool geo_reflect = dot(ls.wi, si.ng) * dot(wo, si.ng) > 0;
         const bool sh_reflect = wi_l.z * wo_l.z > 0;
-        if (!f.is_black() && (resolves || geo_reflect == sh_reflect)) {
+        const bool lit = !f.is_black() && (resolves || geo_reflect == sh_reflect);
+        if (lit && !nee.traced) {
+          nee.traced = true;
           const Vec3 origin = offset_ray_origin(si.p, si.ng, ls.wi);
           Vec3 dir = ls.wi;
           float tmax = kInf;
@@ -195,13 +226,14 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
             // Yarn between the shading point and the shell's surface first.
             Rgb tr = resolves ? m.self_transmittance(si, dir) : Rgb(1.0f);
             if (!tr.is_black()) tr *= shadow_transmittance(origin, dir, tmax, stats, sampler, si.cone_width, ray.cone_spread);
-            if (!tr.is_black()) {
-              float w = 1.0f;
-              if (!ls.delta && strategy == Strategy::Mis)
-                w = power_heuristic(sel * ls.pdf, bsdf_pdf >= 0 ? bsdf_pdf : m.pdf(si, wo_l, wi_l));
-              radiance += beta * f * tr * ls.li * (std::fabs(wi_l.z) * w / (sel * ls.pdf));
-            }
+            nee.tr = tr;
           }
+        }
+        if (lit && !nee.tr.is_black()) {
+          float w = 1.0f;
+          if (!ls.delta && strategy == Strategy::Mis)
+            w = power_heuristic(sel * ls.pdf, bsdf_pdf >= 0 ? bsdf_pdf : m.pdf(si, wo_l, wi_l));
+          radiance += beta * f * nee.tr * ls.li * (std::fabs(wi_l.z) * w / (sel * ls.pdf));
         }
       }
     }
@@ -227,8 +259,9 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
     }
     // Met yarn again inside the shell (the near field's march, or the class
     // table's shadowed share): that is the next vertex.
-    const bool again = bs.internal ? m.bounce_table(si, wi) : resolves && m.bounce_inside(si, wi);
+    const bool again = bs.internal ? m.bounce_table(si, wi, sampler.get1d()) : resolves && m.bounce_inside(si, wi);
     if (bs.internal && !again) break;
+    walk = bs.internal;
     if (again) {
       ray.o = si.p;
       ray.d = wi;

@@ -80,8 +80,9 @@ class Material {
   virtual Rgb self_transmittance(const SurfaceInteraction&, Vec3 /*w*/) const { return Rgb(1.0f); }
   // A sample with `internal` set (the knit model's class table): wi (world)
   // meets other yarn of the same footprint; si becomes that scattering
-  // point, seen from -wi. False when the material has no such samples.
-  virtual bool bounce_table(SurfaceInteraction&, Vec3 /*wi*/) const { return false; }
+  // point, seen from -wi (u: a uniform number for its choices). False
+  // when the material has no such samples.
+  virtual bool bounce_table(SurfaceInteraction&, Vec3 /*wi*/, float /*u*/) const { return false; }
   // A bounce of a resolved hit that stays inside it: when the ray leaving si
   // along wi (world) meets the same material again before leaving the
   // surface's shell, si becomes that hit (shading set, as resolve does) and

@@ -159,7 +159,10 @@ PassThrough KnitModelMaterial::resolve(SurfaceInteraction& si, const RayDifferen
   knit::BaseHit hit = base_hit(si, ray.diff_scale);
   const knit::KnitMaterial& model = cone_footprint(si, ray.d, hit) ? *model_ : model_for(hit);
   const Vec2 shift = footprint_shift(model, hit, sampler);
-  const knit::KnitShade sh = model.shade(hit, to_kvec(ray.d), frame_.get(), {shift.x, shift.y});
+  // With the tabulated BSDF, one number serves the pass through the gaps
+  // and, past it, the pick of the mix's view nodes (KnitMaterial::shade).
+  const float u = model.table_bsdf() ? sampler.get1d() : -1.0f;
+  const knit::KnitShade sh = model.shade(hit, to_kvec(ray.d), frame_.get(), {shift.x, shift.y}, u);
   pt.from_table = sh.from_table;
   pt.from_sub_cells = sh.from_sub_cells;
   pt.aggregated = sh.aggregated;
@@ -167,7 +170,7 @@ PassThrough KnitModelMaterial::resolve(SurfaceInteraction& si, const RayDifferen
     pt.pass = true;  // no yarn along this ray: it goes on straight
     return pt;
   }
-  if (sh.point.p_delta > 0 && sampler.get1d() < sh.point.p_delta) {
+  if (sh.point.p_delta > 0 && (u >= 0 ? u : sampler.get1d()) < sh.point.p_delta) {
     pt.pass = true;  // multi-scale: through a gap, with probability p_delta
     return pt;
   }
@@ -186,7 +189,13 @@ void KnitModelMaterial::apply_shade(SurfaceInteraction& si, const knit::KnitShad
   const Frame base = si.yarn.in_shell ? si.yarn.base : si.shading;
   si.shading = Frame::from_normal_tangent(n / ln, from_kvec(sh.st));
   si.yarn.active = true;
-  si.yarn.bsdf = model.kernel_bsdf(sh);
+  if (sh.table_bsdf) {
+    // The tabulated BSDF reads only the body colours of the yarn BSDF.
+    si.yarn.bsdf.kd_r = knit::k::kv3(sh.kd_r.r, sh.kd_r.g, sh.kd_r.b);
+    si.yarn.bsdf.kd_t = knit::k::kv3(sh.kd_t.r, sh.kd_t.g, sh.kd_t.b);
+  } else {
+    si.yarn.bsdf = model.kernel_bsdf(sh);
+  }
   si.yarn.table = sh.table_bsdf;
   if (sh.table_bsdf) si.yarn.mix = sh.mix;
   si.yarn.in_shell = sh.in_shell;
@@ -237,11 +246,12 @@ Rgb KnitModelMaterial::self_transmittance(const SurfaceInteraction& si, Vec3 w) 
                                                                                                    : Rgb(1.0f);
 }
 
-bool KnitModelMaterial::bounce_table(SurfaceInteraction& si, Vec3 wi) const {
+bool KnitModelMaterial::bounce_table(SurfaceInteraction& si, Vec3 wi, float u) const {
   // The yarn met inside the footprint is taken as yarn of the same classes
-  // seen from -wi: the table's mix for that view, at the same point.
+  // seen from -wi: the table's mix for that view (its view nodes picked
+  // with u), at the same point.
   if (!si.yarn.table) return false;
-  si.yarn.table->remix(si.yarn.mix, to_kvec(si.shading.to_local(-wi)));
+  si.yarn.table->remix(si.yarn.mix, to_kvec(si.shading.to_local(-wi)), u);
   return si.yarn.mix.n > 0;
 }
 

@@ -65,7 +65,7 @@ class KnitModelMaterial final : public YarnShadedMaterial {
   PassThrough resolve(SurfaceInteraction& si, const RayDifferential& ray, Sampler& sampler) const override;
   Rgb transmittance(const SurfaceInteraction& si, Vec3 w, Sampler& sampler) const override;
   Rgb self_transmittance(const SurfaceInteraction& si, Vec3 w) const override;
-  bool bounce_table(SurfaceInteraction& si, Vec3 wi) const override;
+  bool bounce_table(SurfaceInteraction& si, Vec3 wi, float u) const override;
   bool bounce_inside(SurfaceInteraction& si, Vec3 wi) const override;
 
   const knit::KnitMaterial& model() const { return *model_; }

@@ -320,22 +320,6 @@ std::vector<float> FootprintTable::sub_moments() const {
   return out;
 }
 
-SphereNodes sphere_nodes(Vec3 wi, int theta_nodes, int phi_nodes) {
-  const float th = atan2_approx(std::sqrt(wi.x * wi.x + wi.y * wi.y), wi.z);  // in [0, pi]
-  float ph = atan2_approx(wi.y, wi.x);
-  if (ph < 0) ph += 2 * kPi;
-  const float ft = std::clamp(th / kPi * float(theta_nodes - 1), 0.0f, float(theta_nodes - 1));
-  const int i0 = std::min(int(ft), theta_nodes - 1), i1 = std::min(i0 + 1, theta_nodes - 1);
-  const float wt = ft - float(i0);
-  const float fp = ph / (2 * kPi) * float(phi_nodes);
-  const int j0 = std::min(int(fp), phi_nodes - 1), j1 = (j0 + 1) % phi_nodes;
-  const float wp = std::clamp(fp - float(j0), 0.0f, 1.0f);
-  SphereNodes d;
-  d.node = {i0 * phi_nodes + j0, i0 * phi_nodes + j1, i1 * phi_nodes + j0, i1 * phi_nodes + j1};
-  d.w = {(1 - wt) * (1 - wp), (1 - wt) * wp, wt * (1 - wp), wt * wp};
-  return d;
-}
-
 float FootprintTable::hit_fraction(int cls, const DirWeights& d) const {
   const int slot = slot_[size_t(cls)];
   return slot < 0 ? 0 : slot_hit_fraction(slot, d);  // absent: not for the pattern's own cells

@@ -260,7 +260,7 @@ bool KnitMaterial::uses_shift(const BaseHit& hit) const {
 }
 
 KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
-                              std::array<float, 2> shift) const {
+                              std::array<float, 2> shift, float u) const {
   KnitShade sh = unshaded();
   const YarnBsdfParams& bp = params_.bsdf;
   const float S = hit.pattern_per_world;
@@ -288,9 +288,9 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     sh.from_table = true;
     sh.steps = 0;
     sh.point.p_delta = p;
-    if (!(p < 1)) return sh;
+    if (!(p < 1) || (u >= 0 && u < p)) return sh;  // (the caller passes through a gap)
     set_colors(sh, 0);
-    if (use_table_bsdf(hit, wi, slot_hits.data(), sh)) {
+    if (use_table_bsdf(hit, wi, slot_hits.data(), u, sh)) {
       sh.pass_through = false;
       sh.point.layers = 1;
       sh.point.shadow = mean_shadow_;
@@ -341,7 +341,7 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     } else {
       mix_colors(sh, a.color_w);
     }
-    if (mix_out && use_table_bsdf(hit, wi, slot_hits.data(), sh)) {
+    if (mix_out && use_table_bsdf(hit, wi, slot_hits.data(), u, sh)) {
       const Vec3 d = k::kv3_sub(a.position, k::kv3(x, y, top));
       sh.offset = k::kv3_scale(to_world(d, hit.t, hit.b, hit.n), 1.0f / S);
       return sh;
@@ -487,9 +487,13 @@ float KnitMaterial::transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameP
   return march(hit, ray_dir, frame, true).state == KNIT_CAPM_HIT ? 0.0f : 1.0f;
 }
 
-bool KnitMaterial::use_table_bsdf(const BaseHit& hit, Vec3 wi, const float* slot_hits, KnitShade& sh) const {
+bool KnitMaterial::use_table_bsdf(const BaseHit& hit, Vec3 wi, const float* slot_hits, float u,
+                                  KnitShade& sh) const {
+  // The caller's number past the pass through the gaps: uniform again.
+  const float p = sh.point.p_delta;
+  const float u_view = u >= 0 && p < 1 ? std::clamp((u - p) / (1 - p), 0.0f, 0.99999994f) : -1.0f;
   sh.mix = table_bsdf_->mix(slot_hits, wi, (sh.kd_r.r + sh.kd_r.g + sh.kd_r.b) / 3,
-                            (sh.kd_t.r + sh.kd_t.g + sh.kd_t.b) / 3);
+                            (sh.kd_t.r + sh.kd_t.g + sh.kd_t.b) / 3, u_view);
   if (sh.mix.n == 0) return false;  // (no class with hits to weigh)
   sh.table_bsdf = table_bsdf_.get();
   sh.st = hit.t;  // the base's frame: fabric x, y and front normal

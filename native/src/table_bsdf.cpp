@@ -93,10 +93,22 @@ Vec3 TableBsdf::node_direction(int node) {
   return k::kv3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
 }
 
-float TableBsdf::cell_solid_angle(int i) {
-  const float lo = std::max(0.0f, (float(i) - 0.5f) * kDTheta), hi = std::min(kPi, (float(i) + 0.5f) * kDTheta);
-  return (std::cos(lo) - std::cos(hi)) * kDPhi;
-}
+namespace {
+// The theta rows' cells (theta within half a node spacing of the row's,
+// clipped to [0, pi]): the cosines of their edges and their solid angles.
+struct ThetaCells {
+  std::array<float, TableBsdf::kTheta + 1> cos_edge;
+  std::array<float, TableBsdf::kTheta> omega;
+  ThetaCells() {
+    for (int i = 0; i <= TableBsdf::kTheta; ++i)
+      cos_edge[size_t(i)] = std::cos(std::clamp((float(i) - 0.5f) * kDTheta, 0.0f, kPi));
+    for (int i = 0; i < TableBsdf::kTheta; ++i) omega[size_t(i)] = (cos_edge[size_t(i)] - cos_edge[size_t(i) + 1]) * kDPhi;
+  }
+};
+const ThetaCells kThetaCells;
+}  // namespace
+
+float TableBsdf::cell_solid_angle(int i) { return kThetaCells.omega[size_t(i)]; }
 
 TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, int hits_per_view,
                      int march_stride) {
@@ -191,7 +203,7 @@ std::array<float, 4> TableBsdf::value(int slot, int view, int l) const {
   return {from_bf16(p[0]), from_bf16(p[1]), from_bf16(p[2]), from_bf16(p[3])};
 }
 
-TableBsdf::Mix TableBsdf::mix(const float* slot_hits, Vec3 wo, float cr, float ct) const {
+TableBsdf::Mix TableBsdf::mix(const float* slot_hits, Vec3 wo, float cr, float ct, float u_view) const {
   Mix m;
   m.cr = cr;
   m.ct = ct;
@@ -199,13 +211,26 @@ TableBsdf::Mix TableBsdf::mix(const float* slot_hits, Vec3 wo, float cr, float c
   for (int s = 0; s < slots_; ++s) total += std::max(0.0f, slot_hits[s]);
   if (!(total > 0)) return m;
   for (int s = 0; s < slots_; ++s) m.share[size_t(s)] = std::max(0.0f, slot_hits[s]) / total;
-  remix(m, wo);
+  remix(m, wo, u_view);
   return m;
 }
 
-void TableBsdf::remix(Mix& m, Vec3 wo) const {
+void TableBsdf::remix(Mix& m, Vec3 wo, float u_view) const {
   m.n = 0;
-  const SphereNodes c = sphere_nodes(wo, kTheta, kPhi);
+  SphereNodes c = sphere_nodes(wo, kTheta, kPhi);
+  if (u_view >= 0) {
+    // One node, with probability its weight (the last one with weight
+    // when rounding leaves u_view past the sum).
+    int pick = -1;
+    float acc = 0;
+    for (int q = 0; q < 4; ++q) {
+      if (!(c.w[size_t(q)] > 0)) continue;
+      pick = q;
+      acc += c.w[size_t(q)];
+      if (u_view < acc) break;
+    }
+    for (int q = 0; q < 4; ++q) c.w[size_t(q)] = q == pick ? 1.0f : 0.0f;
+  }
   for (int s = 0; s < slots_; ++s) {
     const float share = m.share[size_t(s)];
     if (!(share > 0)) continue;
@@ -302,8 +327,7 @@ bool TableBsdf::sample(const Mix& m, float u0, float u1, float u2, Vec3& wi, flo
       target -= v;
     }
     if (u_rest) *u_rest = v > 0 ? std::clamp(target / v, 0.0f, 0.99999994f) : 0.5f;
-    const float lo = std::max(0.0f, (float(i) - 0.5f) * kDTheta), hi = std::min(kPi, (float(i) + 0.5f) * kDTheta);
-    const float clo = std::cos(lo), chi = std::cos(hi);
+    const float clo = kThetaCells.cos_edge[size_t(i)], chi = kThetaCells.cos_edge[size_t(i) + 1];
     z = clo + (chi - clo) * u1;
     ph = (float(j) - 0.5f + u2) * kDPhi;
   }

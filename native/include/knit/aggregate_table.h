@@ -67,7 +67,23 @@ struct SphereNodes {
   std::array<int, 4> node;
   std::array<float, 4> w;
 };
-SphereNodes sphere_nodes(Vec3 d, int theta_nodes, int phi_nodes);
+// (Inline: every table lookup starts here.)
+inline SphereNodes sphere_nodes(Vec3 wi, int theta_nodes, int phi_nodes) {
+  constexpr float pi = 3.14159265358979f;
+  const float th = atan2_approx(std::sqrt(wi.x * wi.x + wi.y * wi.y), wi.z);  // in [0, pi]
+  float ph = atan2_approx(wi.y, wi.x);
+  if (ph < 0) ph += 2 * pi;
+  const float ft = std::clamp(th / pi * float(theta_nodes - 1), 0.0f, float(theta_nodes - 1));
+  const int i0 = std::min(int(ft), theta_nodes - 1), i1 = std::min(i0 + 1, theta_nodes - 1);
+  const float wt = ft - float(i0);
+  const float fp = ph / (2 * pi) * float(phi_nodes);
+  const int j0 = std::min(int(fp), phi_nodes - 1), j1 = j0 + 1 < phi_nodes ? j0 + 1 : 0;
+  const float wp = std::clamp(fp - float(j0), 0.0f, 1.0f);
+  SphereNodes d;
+  d.node = {i0 * phi_nodes + j0, i0 * phi_nodes + j1, i1 * phi_nodes + j0, i1 * phi_nodes + j1};
+  d.w = {(1 - wt) * (1 - wp), (1 - wt) * wp, wt * (1 - wp), wt * wp};
+  return d;
+}
 
 // std::lround for a count or mean that is >= 0 and far below 2^31: the
 // same value (in double, v + 0.5 is exact and truncation is the floor),

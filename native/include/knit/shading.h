@@ -107,9 +107,13 @@ class KnitMaterial {
   // Geometry and shading point for a ray travelling along ray_dir (world,
   // unit) that hit the base mesh. `frame` bends CAPM rays on curved meshes
   // (null: the base curvature in `hit`, flat when zero). `shift` is the
-  // multi-scale footprint sample shift, in [0, 1)^2.
+  // multi-scale footprint sample shift, in [0, 1)^2. `u`, when in [0, 1),
+  // is the caller's number for the pass through the gaps (it passes when
+  // u < the result's p_delta); where the path stays on a footprint shaded
+  // with the tabulated BSDF, (u - p_delta) / (1 - p_delta) then picks the
+  // mix's view nodes (TableBsdf::mix's u_view). Negative: their blend.
   KnitShade shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
-                  std::array<float, 2> shift = {0.5f, 0.5f}) const;
+                  std::array<float, 2> shift = {0.5f, 0.5f}, float u = -1) const;
 
   // Whether shade() and transmittance() at this hit read their `shift`:
   // only multi-scale footprints that are marched, or read from the class
@@ -196,7 +200,7 @@ class KnitMaterial {
   // Shades sh with the tabulated BSDF: the mix of the classes' hits
   // `slot_hits` seen from wi (colours already in sh), in the base's frame;
   // false, sh's shading untouched, when no class has hits to weigh.
-  bool use_table_bsdf(const BaseHit& hit, Vec3 wi, const float* slot_hits, KnitShade& sh) const;
+  bool use_table_bsdf(const BaseHit& hit, Vec3 wi, const float* slot_hits, float u, KnitShade& sh) const;
   void set_colors(KnitShade& sh, int color_index) const;
   // Palette mixed by a footprint's colour histogram (KNIT_MS_COLORS bins).
   void mix_colors(KnitShade& sh, const float* weights) const;

@@ -62,7 +62,12 @@ class TableBsdf {
   // A footprint's shading seen from wo (fabric frame, unit, either side):
   // the (class, view node) rows to mix and their weights. `slot_hits`
   // holds, per class slot of the table, the footprint's hits on that class
-  // (any scale; FootprintTable::aggregate's slot_hits).
+  // (any scale; FootprintTable::aggregate's slot_hits). With u_view in
+  // [0, 1), each class takes one of the four view nodes around wo instead
+  // of their bilinear blend: node q with probability its weight, picked by
+  // u_view. That is the blend in expectation at a quarter of the cost of
+  // every later evaluation and sample, for renderers, which average many
+  // samples anyway; negative u_view: the blend itself.
   struct Mix {
     int n = 0;
     std::array<int32_t, kMaxTerms> row{};
@@ -74,9 +79,9 @@ class TableBsdf {
     float cr = 0, ct = 0;
     std::array<float, kTheta + 1> rows{};
   };
-  Mix mix(const float* slot_hits, Vec3 wo, float cr, float ct) const;
+  Mix mix(const float* slot_hits, Vec3 wo, float cr, float ct, float u_view = -1) const;
   // The same classes seen from another direction wo.
-  void remix(Mix& m, Vec3 wo) const;
+  void remix(Mix& m, Vec3 wo, float u_view = -1) const;
 
   // f(wo, wi) |wi.z| V(wi) of the mix towards wi (fabric frame, unit), per
   // channel, with body colours kd_r, kd_t: the light that reaches the
