@@ -187,7 +187,7 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
       }
       const LightSample& ls = nee.ls;
       const float sel = nee.sel;
-      if (nee.valid) {
+      if (nee.valid && !(walked && nee.traced && nee.tr.is_black())) {  // (a shadow known: no evaluation)
         const Vec3 wi_l = si.shading.to_local(ls.wi);
         const bool mis = !ls.delta && strategy == Strategy::Mis;
         float bsdf_pdf = -1;  // (set by materials that evaluate it with f)

@@ -491,9 +491,9 @@ bool KnitMaterial::use_table_bsdf(const BaseHit& hit, Vec3 wi, const float* slot
                                   KnitShade& sh) const {
   // The caller's number past the pass through the gaps: uniform again.
   const float p = sh.point.p_delta;
-  const float u_view = u >= 0 && p < 1 ? std::clamp((u - p) / (1 - p), 0.0f, 0.99999994f) : -1.0f;
+  const float u_mix = u >= 0 && p < 1 ? std::clamp((u - p) / (1 - p), 0.0f, 0.99999994f) : -1.0f;
   sh.mix = table_bsdf_->mix(slot_hits, wi, (sh.kd_r.r + sh.kd_r.g + sh.kd_r.b) / 3,
-                            (sh.kd_t.r + sh.kd_t.g + sh.kd_t.b) / 3, u_view);
+                            (sh.kd_t.r + sh.kd_t.g + sh.kd_t.b) / 3, u_mix);
   if (sh.mix.n == 0) return false;  // (no class with hits to weigh)
   sh.table_bsdf = table_bsdf_.get();
   sh.st = hit.t;  // the base's frame: fabric x, y and front normal

@@ -168,7 +168,7 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
     const double inv = hits ? 1.0 / hits : 0.0;
     for (int l = 0; l < kNodes; ++l) {
       const size_t src = size_t(is_pole_copy(l) ? l - l % kPhi : l) * 3;
-      uint16_t* out = &values_[((size_t(slot) * kNodes + size_t(view)) * kNodes + size_t(l)) * kValues];
+      uint16_t* out = &values_[((size_t(view) * kNodes + size_t(l)) * size_t(slots_) + size_t(slot)) * kValues];
       for (int c = 0; c < 3; ++c) out[c] = bf16(float(std::max(0.0, all[src + size_t(c)] * inv)));
       // The lit share of f over the marched hits (a ratio estimator: the
       // shadows' marches are 95% of the build, the BSDF's evaluations cheap
@@ -179,27 +179,32 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
       out[3] = bf16(float(m > 0 ? std::clamp(v / m, 0.0, 1.0) : 1.0));
     }
   });
-  for (int slot = 0; slot < slots_; ++slot)
-    for (int view = 0; view < kNodes; ++view) {
-      if (is_pole_copy(view)) {
-        const size_t n = size_t(kNodes) * kValues;
-        const uint16_t* src = &values_[(size_t(slot) * kNodes + size_t(view - view % kPhi)) * n];
-        std::copy(src, src + n, &values_[(size_t(slot) * kNodes + size_t(view)) * n]);
-      }
-      // Row sums over solid angle, as stored (bfloat16), and their total.
-      float* r = &rows_[(size_t(slot) * kNodes + size_t(view)) * (kTheta + 1) * 4];
+  const size_t view_block = size_t(kNodes) * size_t(slots_) * kValues;
+  const auto row_sums = [&](int view, int i, int slot) {
+    return &rows_[((size_t(view) * (kTheta + 1) + size_t(i)) * size_t(slots_) + size_t(slot)) * 4];
+  };
+  for (int view = 0; view < kNodes; ++view) {
+    if (is_pole_copy(view)) {
+      const uint16_t* src = &values_[size_t(view - view % kPhi) * view_block];
+      std::copy(src, src + view_block, &values_[size_t(view) * view_block]);
+    }
+    // Row sums over solid angle, as stored (bfloat16), and their total.
+    for (int slot = 0; slot < slots_; ++slot) {
       for (int l = 0; l < kNodes; ++l) {
         const std::array<float, 4> v = value(slot, view, l);
-        for (int c = 0; c < 3; ++c) r[size_t(l / kPhi) * 4 + size_t(c)] += omega[size_t(l / kPhi)] * v[size_t(c)];
+        float* r = row_sums(view, l / kPhi, slot);
+        for (int c = 0; c < 3; ++c) r[c] += omega[size_t(l / kPhi)] * v[size_t(c)];
       }
+      float* total = row_sums(view, kTheta, slot);
       for (int i = 0; i < kTheta; ++i)
-        for (int c = 0; c < 3; ++c) r[size_t(kTheta) * 4 + size_t(c)] += r[size_t(i) * 4 + size_t(c)];
+        for (int c = 0; c < 3; ++c) total[c] += row_sums(view, i, slot)[c];
     }
+  }
   seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 std::array<float, 4> TableBsdf::value(int slot, int view, int l) const {
-  const uint16_t* p = &values_[((size_t(slot) * kNodes + size_t(view)) * kNodes + size_t(l)) * kValues];
+  const uint16_t* p = at(view, l) + size_t(slot) * kValues;
   return {from_bf16(p[0]), from_bf16(p[1]), from_bf16(p[2]), from_bf16(p[3])};
 }
 
@@ -217,55 +222,59 @@ TableBsdf::Mix TableBsdf::mix(const float* slot_hits, Vec3 wo, float cr, float c
 
 void TableBsdf::remix(Mix& m, Vec3 wo, float u_view) const {
   m.n = 0;
-  SphereNodes c = sphere_nodes(wo, kTheta, kPhi);
+  const SphereNodes c = sphere_nodes(wo, kTheta, kPhi);
   if (u_view >= 0) {
     // One node, with probability its weight (the last one with weight
     // when rounding leaves u_view past the sum).
-    int pick = -1;
     float acc = 0;
     for (int q = 0; q < 4; ++q) {
       if (!(c.w[size_t(q)] > 0)) continue;
-      pick = q;
+      m.view[0] = c.node[size_t(q)];
+      m.w[0] = 1;
+      m.n = 1;
       acc += c.w[size_t(q)];
       if (u_view < acc) break;
     }
-    for (int q = 0; q < 4; ++q) c.w[size_t(q)] = q == pick ? 1.0f : 0.0f;
-  }
-  for (int s = 0; s < slots_; ++s) {
-    const float share = m.share[size_t(s)];
-    if (!(share > 0)) continue;
+  } else {
     for (int q = 0; q < 4; ++q) {
-      const float w = share * c.w[size_t(q)];
-      if (!(w > 0)) continue;
-      m.row[size_t(m.n)] = s * kNodes + c.node[size_t(q)];
-      m.w[size_t(m.n)] = w;
+      if (!(c.w[size_t(q)] > 0)) continue;
+      m.view[size_t(m.n)] = c.node[size_t(q)];
+      m.w[size_t(m.n)] = c.w[size_t(q)];
       ++m.n;
     }
   }
   // The sampling rows, once per shading point (sample and pdf read them).
-  std::array<F4, kTheta + 1> sum{};
-  for (int t = 0; t < m.n; ++t) {
-    const float* r = &rows_[size_t(m.row[size_t(t)]) * (kTheta + 1) * 4];
-    const float w = m.w[size_t(t)];
-    for (int i = 0; i <= kTheta; ++i) sum[size_t(i)] += w * load4(r + 4 * i);
+  // (Row by row: an array of sums to clear first cost more than the sums.)
+  for (int i = 0; i <= kTheta; ++i) {
+    F4 sum{};
+    for (int t = 0; t < m.n; ++t) {
+      const float* r = rows_at(m.view[size_t(t)], i);
+      for (int s = 0; s < slots_; ++s) sum += (m.w[size_t(t)] * m.share[size_t(s)]) * load4(r + 4 * s);
+    }
+    m.rows[size_t(i)] = sum[0] + m.cr * sum[1] + m.ct * sum[2];
   }
-  for (int i = 0; i <= kTheta; ++i) m.rows[size_t(i)] = sum[size_t(i)][0] + m.cr * sum[size_t(i)][1] + m.ct * sum[size_t(i)][2];
 }
 
 Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total, float* density_out) const {
   const SphereNodes c = sphere_nodes(wi, kTheta, kPhi);
   // Sums of the lit parts (A, Br, Bt times the lit share) and, when asked,
-  // of the parts themselves, four lanes at a time.
-  F4 lit{}, all{};
-  for (int t = 0; t < m.n; ++t) {
-    const uint16_t* row = &values_[size_t(m.row[size_t(t)]) * kNodes * kValues];
+  // of the parts themselves, four lanes at a time; the classes of a pair of
+  // nodes lie side by side. One sum per light node: four chains of
+  // additions side by side, not one four times as long.
+  F4 lit_q[4]{}, all_q[4]{};
+  for (int t = 0; t < m.n; ++t)
     for (int q = 0; q < 4; ++q) {
       const float w = m.w[size_t(t)] * c.w[size_t(q)];
-      const F4 p = bf16x4(row + size_t(c.node[size_t(q)]) * kValues);
-      lit += (w * p[3]) * p;
-      if (total) all += w * p;
+      const uint16_t* p = at(m.view[size_t(t)], c.node[size_t(q)]);
+      for (int s = 0; s < slots_; ++s) {
+        const F4 v = bf16x4(p + kValues * s);
+        const float ws = w * m.share[size_t(s)];
+        lit_q[q] += (ws * v[3]) * v;
+        all_q[q] += ws * v;
+      }
     }
-  }
+  const F4 lit = (lit_q[0] + lit_q[1]) + (lit_q[2] + lit_q[3]);
+  const F4 all = (all_q[0] + all_q[1]) + (all_q[2] + all_q[3]);
   const auto rgb = [&](const F4& v) {
     return k::kv3(v[0] + v[1] * kd_r.x + v[2] * kd_t.x, v[0] + v[1] * kd_r.y + v[2] * kd_t.y,
                   v[0] + v[1] * kd_r.z + v[2] * kd_t.z);
@@ -277,8 +286,10 @@ Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total, f
 
 float TableBsdf::node_value(const Mix& m, int l) const {
   F4 v{};
-  for (int t = 0; t < m.n; ++t)
-    v += m.w[size_t(t)] * bf16x4(&values_[(size_t(m.row[size_t(t)]) * kNodes + size_t(l)) * kValues]);
+  for (int t = 0; t < m.n; ++t) {
+    const uint16_t* p = at(m.view[size_t(t)], l);
+    for (int s = 0; s < slots_; ++s) v += (m.w[size_t(t)] * m.share[size_t(s)]) * bf16x4(p + kValues * s);
+  }
   return v[0] + m.cr * v[1] + m.ct * v[2];
 }
 
@@ -310,19 +321,13 @@ bool TableBsdf::sample(const Mix& m, float u0, float u1, float u2, Vec3& wi, flo
       if (target < r) break;
       target -= r;
     }
-    // The row's node values in one pass over each term's contiguous row.
-    std::array<F4, kPhi> row{};
-    for (int t = 0; t < m.n; ++t) {
-      const uint16_t* p = &values_[(size_t(m.row[size_t(t)]) * kNodes + size_t(i) * kPhi) * kValues];
-      const float w = m.w[size_t(t)];
-      for (int q = 0; q < kPhi; ++q) row[size_t(q)] += w * bf16x4(p + q * kValues);
-    }
+    // Then the node in the row, its value computed as the walk along the
+    // row reaches it.
     const float om = cell_solid_angle(i);
     int j = 0;
     float v = 0;
     for (; j < kPhi; ++j) {
-      const F4& r = row[size_t(j)];
-      v = (r[0] + m.cr * r[1] + m.ct * r[2]) * om;
+      v = node_value(m, i * kPhi + j) * om;
       if (target < v || j == kPhi - 1) break;
       target -= v;
     }

@@ -62,16 +62,17 @@ double angle_between(const D3& a, const D3& b) {
   return std::acos(std::clamp(d, -1.0, 1.0)) * 180 / kPiD;
 }
 
-// The table's direction bins come from atan2_approx: against double
-// precision atan2 over every octant, the axes, near-axis and tiny arguments.
-TEST(FootprintTable, ApproximateAtan2IsWithin2e6OfDoublePrecision) {
+// The tables' direction bins come from atan2_coarse, environment-map
+// texels from atan2_approx and acos_approx: against double precision atan2
+// over every octant, the axes, near-axis and tiny arguments.
+double worst_atan2_error(float (*f)(float, float)) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> ang(-3.2f, 3.2f), mag(-20.0f, 5.0f);
   double worst = 0;
   auto check = [&](float y, float x) {
     const double ref = std::atan2(double(y), double(x));
-    const double got = atan2_approx(y, x);
-    ASSERT_TRUE(std::isfinite(got)) << y << " " << x;
+    const double got = f(y, x);
+    EXPECT_TRUE(std::isfinite(got)) << y << " " << x;
     // +-pi are the same direction; the cut sits on x < 0, y = 0.
     double e = std::fabs(got - ref);
     e = std::min(e, std::fabs(e - 2 * kPiD));
@@ -86,9 +87,36 @@ TEST(FootprintTable, ApproximateAtan2IsWithin2e6OfDoublePrecision) {
       for (float x : {0.0f, v, -v}) check(y, x);
   check(1.0f, 1e-7f);
   check(-1e-7f, -1.0f);
-  EXPECT_LT(worst, 2e-6);
-  EXPECT_EQ(atan2_approx(0.0f, 0.0f), 0.0f);
-  EXPECT_GT(worst, 0.0) << "an exact atan2 would not need this test";
+  EXPECT_EQ(f(0.0f, 0.0f), 0.0f);
+  return worst;
+}
+
+TEST(FootprintTable, ApproximateAtan2IsWithinItsBoundOfDoublePrecision) {
+  const double fine = worst_atan2_error(atan2_approx), coarse = worst_atan2_error(atan2_coarse);
+  std::printf("[atan2] worst error %.3g rad (atan2_approx), %.3g rad (atan2_coarse)\n", fine, coarse);
+  EXPECT_LT(fine, 4e-7);
+  EXPECT_LT(coarse, 1e-4);
+  EXPECT_GT(fine, 0.0) << "an exact atan2 would not need this test";
+}
+
+// acos_approx: against double precision acos of the same float, over
+// [-1, 1] and its ends. The float argument itself resolves angles near 0
+// and pi only to about 3e-4 rad; inside |c| < 0.999 the error must be
+// atan2_approx's.
+TEST(FootprintTable, ApproximateAcosIsWithinItsArgumentsResolution) {
+  double worst_inner = 0, worst_ends = 0;
+  for (int i = 0; i <= 400000; ++i) {
+    const float c = -1.0f + 2.0f * float(i) / 400000.0f;
+    const double e = std::fabs(double(acos_approx(c)) - std::acos(double(c)));
+    double& worst = std::fabs(c) < 0.999f ? worst_inner : worst_ends;
+    worst = std::max(worst, e);
+  }
+  std::printf("[acos] worst error %.3g rad inside |c| < 0.999, %.3g at the ends\n", worst_inner, worst_ends);
+  EXPECT_LT(worst_inner, 5e-7);
+  EXPECT_LT(worst_ends, 1e-5);
+  EXPECT_FLOAT_EQ(acos_approx(1.0f), 0.0f);
+  EXPECT_NEAR(acos_approx(-1.0f), kPiD, 1e-6);
+  EXPECT_NEAR(acos_approx(2.0f), 0.0f, 1e-7) << "clamped";
 }
 
 TEST(FootprintTable, ClassesFollowCodeAndNeighbourSigns) {

@@ -37,27 +37,10 @@
 #include <utility>
 #include <vector>
 
+#include "knit/fast_math.h"
 #include "knit/surface.h"
 
 namespace knit {
-
-// atan2(y, x) in [-pi, pi] to within 2e-6 rad, a fraction of libm's cost
-// (the table's direction bins are 0.14 and 0.39 rad wide): an odd
-// polynomial for atan on [0, 1], fitted minimax for this table, and the
-// octant identities. (acosf and atan2f from libm took a fifth of the
-// aggregate's instructions.) Inline: two calls per table lookup.
-inline float atan2_approx(float y, float x) {
-  constexpr float pi = 3.14159265358979f;
-  const float ax = std::fabs(x), ay = std::fabs(y);
-  const float hi = std::max(ax, ay), lo = std::min(ax, ay);
-  if (!(hi > 0)) return 0;
-  const float t = lo / hi, s = t * t;
-  float r = t * (0.99997723f +
-                 s * (-0.33262283f + s * (0.19354036f + s * (-0.11642643f + s * (0.05264729f + s * -0.01171911f)))));
-  if (ay > ax) r = 0.5f * pi - r;
-  if (x < 0) r = pi - r;
-  return y < 0 ? -r : r;
-}
 
 // The four nodes around unit direction d on a (theta, phi) grid over the
 // whole sphere, theta nodes i pi / (theta_nodes - 1), phi nodes
@@ -70,8 +53,8 @@ struct SphereNodes {
 // (Inline: every table lookup starts here.)
 inline SphereNodes sphere_nodes(Vec3 wi, int theta_nodes, int phi_nodes) {
   constexpr float pi = 3.14159265358979f;
-  const float th = atan2_approx(std::sqrt(wi.x * wi.x + wi.y * wi.y), wi.z);  // in [0, pi]
-  float ph = atan2_approx(wi.y, wi.x);
+  const float th = atan2_coarse(std::sqrt(wi.x * wi.x + wi.y * wi.y), wi.z);  // in [0, pi]
+  float ph = atan2_coarse(wi.y, wi.x);
   if (ph < 0) ph += 2 * pi;
   const float ft = std::clamp(th / pi * float(theta_nodes - 1), 0.0f, float(theta_nodes - 1));
   const int i0 = std::min(int(ft), theta_nodes - 1), i1 = std::min(i0 + 1, theta_nodes - 1);

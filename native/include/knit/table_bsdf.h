@@ -48,7 +48,6 @@ class TableBsdf {
   static constexpr int kTheta = 12;  // nodes i pi / 11 over [0, pi] (none on the horizon)
   static constexpr int kPhi = 12;    // nodes j 2 pi / 12
   static constexpr int kNodes = kTheta * kPhi;
-  static constexpr int kMaxTerms = FootprintTable::kClasses * 4;
 
   // Built for `material`, whose class table it follows (its classes and
   // their cells): `hits_per_view` view rays per class and view node, each
@@ -60,18 +59,18 @@ class TableBsdf {
             int march_stride = 8);
 
   // A footprint's shading seen from wo (fabric frame, unit, either side):
-  // the (class, view node) rows to mix and their weights. `slot_hits`
-  // holds, per class slot of the table, the footprint's hits on that class
-  // (any scale; FootprintTable::aggregate's slot_hits). With u_view in
-  // [0, 1), each class takes one of the four view nodes around wo instead
-  // of their bilinear blend: node q with probability its weight, picked by
-  // u_view. That is the blend in expectation at a quarter of the cost of
-  // every later evaluation and sample, for renderers, which average many
-  // samples anyway; negative u_view: the blend itself.
+  // the view nodes to mix, their weights, and the classes' shares of the
+  // hits. `slot_hits` holds, per class slot of the table, the footprint's
+  // hits on that class (any scale; FootprintTable::aggregate's
+  // slot_hits). With u_view in [0, 1), one of the four view nodes around
+  // wo stands for their bilinear blend: node q with probability its
+  // weight, picked by u_view. That is the blend in expectation at a quarter
+  // of the cost of every later evaluation and sample, for renderers, which
+  // average many samples anyway; negative u_view: the blend itself.
   struct Mix {
-    int n = 0;
-    std::array<int32_t, kMaxTerms> row{};
-    std::array<float, kMaxTerms> w{};
+    int n = 0;  // view nodes mixed; 0 when no class has hits
+    std::array<int32_t, 4> view{};
+    std::array<float, 4> w{};
     std::array<float, FootprintTable::kClasses> share{};  // the classes' shares of the hits
     // Sampling: the body colours' channel means, and the mix's sampling
     // values (A + cr Br + ct Bt) summed over each theta row's cells times
@@ -123,9 +122,19 @@ class TableBsdf {
 
   static constexpr int kValues = 4;
   int slots_ = 0;
-  // [slot][view node][light node][A, Br, Bt, lit share] as bfloat16.
+  // The classes' stored values at a pair of nodes, and the classes' row
+  // sums at a view node and theta row.
+  const uint16_t* at(int view, int light) const {
+    return &values_[(size_t(view) * kNodes + size_t(light)) * size_t(slots_) * kValues];
+  }
+  const float* rows_at(int view, int theta_row) const {
+    return &rows_[(size_t(view) * (kTheta + 1) + size_t(theta_row)) * size_t(slots_) * 4];
+  }
+  // [view node][light node][slot][A, Br, Bt, lit share] as bfloat16: the
+  // classes of one pair of nodes side by side, as a footprint mixes them
+  // (one or two cache lines per lookup).
   std::vector<uint16_t> values_;
-  // [slot][view node][theta row, then the sphere][A, Br, Bt, unused]: the
+  // [view node][theta row, then the sphere][slot][A, Br, Bt, unused]: the
   // values summed over the row's light nodes times their cells' solid
   // angle, and over all rows (sample, pdf; four floats for four lanes).
   std::vector<float> rows_;
