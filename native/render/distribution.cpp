@@ -24,13 +24,23 @@ Distribution1D::Distribution1D(const std::vector<float>& f) : func_(f) {
     for (size_t i = 1; i <= n; ++i) cdf_[i] /= integral_;
   }
   cdf_[n] = 1.0;
+  if (n > 0xffffffffu) throw std::invalid_argument("Distribution1D: more than 2^32 steps");
+  guide_.resize(n);
+  size_t i = 0;
+  for (size_t b = 0; b < n; ++b) {
+    const double u = static_cast<double>(b) / static_cast<double>(n);
+    while (i + 1 < n && cdf_[i + 1] <= u) ++i;
+    guide_[b] = static_cast<uint32_t>(i);
+  }
 }
 
-// Largest i in [0, n-1] with cdf_[i] <= u.
-static size_t find_interval(const std::vector<double>& cdf, double u) {
-  auto it = std::upper_bound(cdf.begin(), cdf.end(), u);
-  size_t i = static_cast<size_t>(std::max<std::ptrdiff_t>(0, (it - cdf.begin()) - 1));
-  return std::min(i, cdf.size() - 2);
+size_t Distribution1D::find(double u) const {
+  const size_t n = func_.size();
+  const double g = u * static_cast<double>(n);
+  size_t i = g > 0 ? guide_[std::min(static_cast<size_t>(g), n - 1)] : 0;
+  while (i > 0 && cdf_[i] > u) --i;  // (u * n rounded up onto the next bucket)
+  while (i + 1 < n && cdf_[i + 1] <= u) ++i;
+  return i;
 }
 
 float Distribution1D::pdf(size_t index) const {
@@ -43,9 +53,9 @@ float Distribution1D::discrete_pdf(size_t index) const {
 }
 
 float Distribution1D::sample(float u, float& pdf_out, size_t& index) const {
-  // Skip zero-probability steps: upper_bound lands on the last step whose
-  // cdf start is <= u, which always has positive probability when u < 1.
-  index = find_interval(cdf_, u);
+  // Skip zero-probability steps: the last step whose cdf start is <= u
+  // always has positive probability when u < 1.
+  index = find(u);
   const double width = cdf_[index + 1] - cdf_[index];
   double du = width > 0 ? (u - cdf_[index]) / width : 0.5;
   du = std::min(std::max(du, 0.0), 1.0);
@@ -56,7 +66,7 @@ float Distribution1D::sample(float u, float& pdf_out, size_t& index) const {
 }
 
 size_t Distribution1D::sample_discrete(float u, float& prob) const {
-  const size_t i = find_interval(cdf_, u);
+  const size_t i = find(u);
   prob = discrete_pdf(i);
   return i;
 }

@@ -243,16 +243,22 @@ void TableBsdf::remix(Mix& m, Vec3 wo, float u_view) const {
       ++m.n;
     }
   }
-  // The sampling rows, once per shading point (sample and pdf read them).
-  // (Row by row: an array of sums to clear first cost more than the sums.)
-  for (int i = 0; i <= kTheta; ++i) {
-    F4 sum{};
-    for (int t = 0; t < m.n; ++t) {
-      const float* r = rows_at(m.view[size_t(t)], i);
-      for (int s = 0; s < slots_; ++s) sum += (m.w[size_t(t)] * m.share[size_t(s)]) * load4(r + 4 * s);
+  // The sampling rows, once per shading point (sample and pdf read them):
+  // the view node's rows of every class lie together. (The sums start
+  // from the first class's terms: an array cleared first cost as much as
+  // the sums.)
+  std::array<F4, kTheta + 1> sum;
+  for (int t = 0; t < m.n; ++t) {
+    const float* r = rows_at(m.view[size_t(t)], 0);
+    for (int s = 0; s < slots_; ++s) {
+      const float w = m.w[size_t(t)] * m.share[size_t(s)];
+      if (t == 0 && s == 0)
+        for (int i = 0; i <= kTheta; ++i) sum[size_t(i)] = w * load4(r + 4 * (i * slots_ + s));
+      else
+        for (int i = 0; i <= kTheta; ++i) sum[size_t(i)] += w * load4(r + 4 * (i * slots_ + s));
     }
-    m.rows[size_t(i)] = sum[0] + m.cr * sum[1] + m.ct * sum[2];
   }
+  for (int i = 0; i <= kTheta; ++i) m.rows[size_t(i)] = sum[size_t(i)][0] + m.cr * sum[size_t(i)][1] + m.ct * sum[size_t(i)][2];
 }
 
 Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total, float* density_out) const {
@@ -261,20 +267,29 @@ Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total, f
   // of the parts themselves, four lanes at a time; the classes of a pair of
   // nodes lie side by side. One sum per light node: four chains of
   // additions side by side, not one four times as long.
-  F4 lit_q[4]{}, all_q[4]{};
-  for (int t = 0; t < m.n; ++t)
-    for (int q = 0; q < 4; ++q) {
-      const float w = m.w[size_t(t)] * c.w[size_t(q)];
-      const uint16_t* p = at(m.view[size_t(t)], c.node[size_t(q)]);
-      for (int s = 0; s < slots_; ++s) {
-        const F4 v = bf16x4(p + kValues * s);
-        const float ws = w * m.share[size_t(s)];
-        lit_q[q] += (ws * v[3]) * v;
-        all_q[q] += ws * v;
+  F4 lit0{}, lit1{}, lit2{}, lit3{}, all0{}, all1{}, all2{}, all3{};
+  for (int t = 0; t < m.n; ++t) {
+    const int v = m.view[size_t(t)];
+    const uint16_t *p0 = at(v, c.node[0]), *p1 = at(v, c.node[1]), *p2 = at(v, c.node[2]), *p3 = at(v, c.node[3]);
+    for (int s = 0; s < slots_; ++s) {
+      const float ws = m.w[size_t(t)] * m.share[size_t(s)];
+      const float w0 = ws * c.w[0], w1 = ws * c.w[1], w2 = ws * c.w[2], w3 = ws * c.w[3];
+      const F4 v0 = bf16x4(p0 + kValues * s), v1 = bf16x4(p1 + kValues * s), v2 = bf16x4(p2 + kValues * s),
+               v3 = bf16x4(p3 + kValues * s);
+      lit0 += (w0 * v0[3]) * v0;
+      lit1 += (w1 * v1[3]) * v1;
+      lit2 += (w2 * v2[3]) * v2;
+      lit3 += (w3 * v3[3]) * v3;
+      if (total) {
+        all0 += w0 * v0;
+        all1 += w1 * v1;
+        all2 += w2 * v2;
+        all3 += w3 * v3;
       }
     }
-  const F4 lit = (lit_q[0] + lit_q[1]) + (lit_q[2] + lit_q[3]);
-  const F4 all = (all_q[0] + all_q[1]) + (all_q[2] + all_q[3]);
+  }
+  const F4 lit = (lit0 + lit1) + (lit2 + lit3);
+  const F4 all = (all0 + all1) + (all2 + all3);
   const auto rgb = [&](const F4& v) {
     return k::kv3(v[0] + v[1] * kd_r.x + v[2] * kd_t.x, v[0] + v[1] * kd_r.y + v[2] * kd_t.y,
                   v[0] + v[1] * kd_r.z + v[2] * kd_t.z);
@@ -321,13 +336,26 @@ bool TableBsdf::sample(const Mix& m, float u0, float u1, float u2, Vec3& wi, flo
       if (target < r) break;
       target -= r;
     }
-    // Then the node in the row, its value computed as the walk along the
-    // row reaches it.
+    // The row's node values in one pass over each term's contiguous row
+    // (its nodes, each with its classes; the sums start from the first
+    // term's, as in remix).
+    std::array<F4, kPhi> row;
+    for (int t = 0; t < m.n; ++t) {
+      const uint16_t* p = at(m.view[size_t(t)], i * kPhi);
+      for (int s = 0; s < slots_; ++s) {
+        const float w = m.w[size_t(t)] * m.share[size_t(s)];
+        if (t == 0 && s == 0)
+          for (int q = 0; q < kPhi; ++q) row[size_t(q)] = w * bf16x4(p + kValues * (q * slots_ + s));
+        else
+          for (int q = 0; q < kPhi; ++q) row[size_t(q)] += w * bf16x4(p + kValues * (q * slots_ + s));
+      }
+    }
     const float om = cell_solid_angle(i);
     int j = 0;
     float v = 0;
     for (; j < kPhi; ++j) {
-      v = node_value(m, i * kPhi + j) * om;
+      const F4& r = row[size_t(j)];
+      v = (r[0] + m.cr * r[1] + m.ct * r[2]) * om;
       if (target < v || j == kPhi - 1) break;
       target -= v;
     }

@@ -39,6 +39,46 @@ TEST(Distribution, OneDimensionalMatchesTheFunction) {
   EXPECT_FLOAT_EQ(d.discrete_pdf(2), 3.0f / 8.0f);
 }
 
+// The guide table only shortens the search: every u must land on the step
+// a binary search over the same CDF (the definition: the last step whose
+// cumulative start is <= u) finds, for smooth functions, runs of zeros, a
+// spike, and u on and beside the guide's bucket edges.
+TEST(Distribution, GuidedSearchFindsTheStepABinarySearchFinds) {
+  Pcg32 rng(3, 4);
+  std::vector<std::vector<float>> fs;
+  std::vector<float> smooth(300), zeros(257, 0.0f), spike(1024, 1e-3f);
+  for (size_t i = 0; i < smooth.size(); ++i) smooth[i] = 1.0f + std::sin(0.05f * float(i));
+  for (size_t i = 100; i < 120; ++i) zeros[i] = float(i % 3);
+  zeros[256] = 2.0f;
+  spike[700] = 5000.0f;
+  fs = {smooth, zeros, spike, {0, 1, 3, 0, 4}, {7}};
+  for (const auto& f : fs) {
+    const Distribution1D d(f);
+    // The CDF as the class builds it, searched with std::upper_bound.
+    std::vector<double> cdf(f.size() + 1, 0.0);
+    for (size_t i = 0; i < f.size(); ++i) cdf[i + 1] = cdf[i] + double(f[i]) / double(f.size());
+    const double total = cdf.back();
+    for (double& c : cdf) c /= total;
+    cdf.back() = 1.0;
+    const auto reference = [&](double u) {
+      const auto it = std::upper_bound(cdf.begin(), cdf.end(), u);
+      return std::min<size_t>(size_t(std::max<std::ptrdiff_t>(0, (it - cdf.begin()) - 1)), f.size() - 1);
+    };
+    std::vector<float> us;
+    for (int i = 0; i < 20000; ++i) us.push_back(rng.next_float());
+    for (size_t b = 0; b < f.size(); ++b) {
+      const float edge = float(double(b) / double(f.size()));
+      us.insert(us.end(), {edge, std::nextafter(edge, 0.0f), std::nextafter(edge, 1.0f)});
+    }
+    for (size_t i = 0; i + 1 < cdf.size(); ++i) us.push_back(float(cdf[i]));
+    for (const float u : us) {
+      if (!(u >= 0.0f && u < 1.0f)) continue;
+      float prob = 0;
+      ASSERT_EQ(d.sample_discrete(u, prob), reference(u)) << "u " << u << ", " << f.size() << " steps";
+    }
+  }
+}
+
 TEST(Distribution, AllZeroFallsBackToUniform) {
   const Distribution1D d(std::vector<float>{0, 0, 0, 0});
   EXPECT_EQ(d.integral(), 0.0);
