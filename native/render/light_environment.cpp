@@ -36,7 +36,7 @@ Vec3 EnvironmentMapLight::direction_of(Vec2 uv) {
 
 Vec2 EnvironmentMapLight::uv_of(Vec3 d) {
   // (libm's atan2f and acosf were a tenth of a scene's render under a map;
-  // these are within 2e-6 rad, a small fraction of a texel.)
+  // these are within 4e-7 rad, a small fraction of a texel.)
   const float phi = knit::atan2_approx(d.x, -d.z);
   float u = 0.5f + phi * kInv2Pi;
   if (u >= 1.0f) u -= 1.0f;

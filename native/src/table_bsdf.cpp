@@ -53,6 +53,29 @@ F4 bf16x4(const uint16_t* p) {
   return f;
 }
 
+// Sums over a mix's terms (view node t, class slot s) of w_t share_s times
+// entry k * slots + s of the term's block, for k < N, four lanes each:
+// block(view) is the view node's first entry, entry(p, i) the four values
+// of entry i from there. The sampling rows (N = kTheta + 1), a theta row's
+// nodes (N = kPhi) and one node (N = 1) are such sums. They start from the
+// first term's products: an array cleared first cost as much as the sums.
+template <size_t N, class Block, class Entry>
+void mixed_sums(const TableBsdf::Mix& m, int slots, Block block, Entry entry, std::array<F4, N>& sum) {
+  if (m.n == 0 || slots == 0) {
+    sum.fill(F4{});
+    return;
+  }
+  const auto* first = block(m.view[0]);
+  for (size_t k = 0; k < N; ++k) sum[k] = (m.w[0] * m.share[0]) * entry(first, int(k) * slots);
+  for (int t = 0; t < m.n; ++t) {
+    const auto* p = block(m.view[size_t(t)]);
+    for (int s = t == 0 ? 1 : 0; s < slots; ++s) {
+      const float w = m.w[size_t(t)] * m.share[size_t(s)];
+      for (size_t k = 0; k < N; ++k) sum[k] += w * entry(p, int(k) * slots + s);
+    }
+  }
+}
+
 // A 32-bit integer hash (the finaliser of MurmurHash3): every input bit
 // reaches every output bit.
 uint32_t hash32(uint32_t h) {
@@ -125,8 +148,6 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
   rows_.assign(size_t(slots_) * kNodes * (kTheta + 1) * 4, 0.0f);
   std::array<Vec3, kNodes> light;
   for (int l = 0; l < kNodes; ++l) light[size_t(l)] = node_direction(l);
-  std::array<float, kTheta> omega;
-  for (int i = 0; i < kTheta; ++i) omega[size_t(i)] = cell_solid_angle(i);
   // The pole rows are one direction each: their first column is computed,
   // the others copy it (views) or its values (lights).
   const auto is_pole_copy = [](int node) { return (node / kPhi == 0 || node / kPhi == kTheta - 1) && node % kPhi; };
@@ -193,7 +214,7 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
       for (int l = 0; l < kNodes; ++l) {
         const std::array<float, 4> v = value(slot, view, l);
         float* r = row_sums(view, l / kPhi, slot);
-        for (int c = 0; c < 3; ++c) r[c] += omega[size_t(l / kPhi)] * v[size_t(c)];
+        for (int c = 0; c < 3; ++c) r[c] += cell_solid_angle(l / kPhi) * v[size_t(c)];
       }
       float* total = row_sums(view, kTheta, slot);
       for (int i = 0; i < kTheta; ++i)
@@ -244,20 +265,11 @@ void TableBsdf::remix(Mix& m, Vec3 wo, float u_view) const {
     }
   }
   // The sampling rows, once per shading point (sample and pdf read them):
-  // the view node's rows of every class lie together. (The sums start
-  // from the first class's terms: an array cleared first cost as much as
-  // the sums.)
+  // the view node's rows of every class lie together.
   std::array<F4, kTheta + 1> sum;
-  for (int t = 0; t < m.n; ++t) {
-    const float* r = rows_at(m.view[size_t(t)], 0);
-    for (int s = 0; s < slots_; ++s) {
-      const float w = m.w[size_t(t)] * m.share[size_t(s)];
-      if (t == 0 && s == 0)
-        for (int i = 0; i <= kTheta; ++i) sum[size_t(i)] = w * load4(r + 4 * (i * slots_ + s));
-      else
-        for (int i = 0; i <= kTheta; ++i) sum[size_t(i)] += w * load4(r + 4 * (i * slots_ + s));
-    }
-  }
+  mixed_sums(
+      m, slots_, [&](int view) { return rows_at(view, 0); }, [](const float* p, int i) { return load4(p + 4 * i); },
+      sum);
   for (int i = 0; i <= kTheta; ++i) m.rows[size_t(i)] = sum[size_t(i)][0] + m.cr * sum[size_t(i)][1] + m.ct * sum[size_t(i)][2];
 }
 
@@ -300,12 +312,11 @@ Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total, f
 }
 
 float TableBsdf::node_value(const Mix& m, int l) const {
-  F4 v{};
-  for (int t = 0; t < m.n; ++t) {
-    const uint16_t* p = at(m.view[size_t(t)], l);
-    for (int s = 0; s < slots_; ++s) v += (m.w[size_t(t)] * m.share[size_t(s)]) * bf16x4(p + kValues * s);
-  }
-  return v[0] + m.cr * v[1] + m.ct * v[2];
+  std::array<F4, 1> v;
+  mixed_sums(
+      m, slots_, [&](int view) { return at(view, l); },
+      [](const uint16_t* p, int i) { return bf16x4(p + kValues * i); }, v);
+  return v[0][0] + m.cr * v[0][1] + m.ct * v[0][2];
 }
 
 float TableBsdf::pdf(const Mix& m, Vec3 wi) const { return density(m, sphere_nodes(wi, kTheta, kPhi)); }
@@ -337,19 +348,11 @@ bool TableBsdf::sample(const Mix& m, float u0, float u1, float u2, Vec3& wi, flo
       target -= r;
     }
     // The row's node values in one pass over each term's contiguous row
-    // (its nodes, each with its classes; the sums start from the first
-    // term's, as in remix).
+    // (its nodes, each with its classes).
     std::array<F4, kPhi> row;
-    for (int t = 0; t < m.n; ++t) {
-      const uint16_t* p = at(m.view[size_t(t)], i * kPhi);
-      for (int s = 0; s < slots_; ++s) {
-        const float w = m.w[size_t(t)] * m.share[size_t(s)];
-        if (t == 0 && s == 0)
-          for (int q = 0; q < kPhi; ++q) row[size_t(q)] = w * bf16x4(p + kValues * (q * slots_ + s));
-        else
-          for (int q = 0; q < kPhi; ++q) row[size_t(q)] += w * bf16x4(p + kValues * (q * slots_ + s));
-      }
-    }
+    mixed_sums(
+        m, slots_, [&](int view) { return at(view, i * kPhi); },
+        [](const uint16_t* p, int k) { return bf16x4(p + kValues * k); }, row);
     const float om = cell_solid_angle(i);
     int j = 0;
     float v = 0;

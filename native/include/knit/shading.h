@@ -111,7 +111,7 @@ class KnitMaterial {
   // is the caller's number for the pass through the gaps (it passes when
   // u < the result's p_delta); where the path stays on a footprint shaded
   // with the tabulated BSDF, (u - p_delta) / (1 - p_delta) then picks the
-  // mix's view node and class (TableBsdf::mix's u). Negative: their blend.
+  // mix's view node (TableBsdf::mix's u_view). Negative: their blend.
   KnitShade shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
                   std::array<float, 2> shift = {0.5f, 0.5f}, float u = -1) const;
 
