@@ -544,7 +544,7 @@ const char* mode_name(KnitMode m) {
 KnitMaterial make_material(const Pattern& pattern, const StitchParams& stitch, ::py::object bsdf,
                            ::py::object ply, const std::string& mode, bool capm, bool ply_detail,
                            int footprint_points, bool footprint_table, double table_min_cells,
-                           bool table_bsdf, bool self_shadowing, bool near_field_below_cell, double uv_scale,
+                           bool table_bsdf, bool table_fold, bool self_shadowing, bool near_field_below_cell, double uv_scale,
                            int max_steps, double max_segment, double max_bend) {
   KnitMaterialParams mp;
   mp.stitch = stitch;
@@ -585,6 +585,7 @@ KnitMaterial make_material(const Pattern& pattern, const StitchParams& stitch, :
   mp.footprint_table = footprint_table;
   mp.table_min_cells = float(table_min_cells);
   mp.table_bsdf = table_bsdf;
+  mp.table_fold = table_fold;
   mp.self_shadowing = self_shadowing;
   mp.near_field_below_cell = near_field_below_cell;
   mp.uv_scale = float(uv_scale);
@@ -1087,7 +1088,7 @@ return the shading point (knit/shading.h).
 
 KnitMaterial(pattern, stitch=StitchParams(), bsdf=None, ply=None,
 mode='near_field', capm=True, ply_detail=True, footprint_points=4,
-footprint_table=True, table_min_cells=0.5, table_bsdf=True, self_shadowing=True,
+footprint_table=True, table_min_cells=0.5, table_bsdf=True, table_fold=True, self_shadowing=True,
 near_field_below_cell=True, uv_scale=40.0, max_steps=32, max_segment=6.2832,
 max_bend=0.05)
 
@@ -1104,7 +1105,11 @@ the table's sub-cell statistics. table_bsdf: the table's footprints are
 shaded with a tabulated BSDF built with it (the near field's shading and
 self-shadowing averaged per class and pair of directions); False: the yarn
 BSDF at the footprint's mean normal with LEAN-widened lobes and no
-self-shadowing. self_shadowing: near field, light and bounced rays from a yarn
+self-shadowing. table_fold: with table_bsdf and a pattern of one colour
+index, the light that meets other yarn of the footprint and scatters there
+is summed into the table as it is built (a renderer's path then never
+walks inside the footprint); False: renderers follow it by a random walk.
+self_shadowing: near field, light and bounced rays from a yarn
 hit cross the rest of the yarn shell (KnitMaterial.occluded_from,
 shade_from) before they leave it. near_field_below_cell: a multi-scale
 footprint below a stitch cell in either direction is shaded as the near
@@ -1118,7 +1123,7 @@ max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
            ::py::arg("mode") = "near_field", ::py::arg("capm") = true,
            ::py::arg("ply_detail") = true, ::py::arg("footprint_points") = 4,
            ::py::arg("footprint_table") = true, ::py::arg("table_min_cells") = 0.5,
-           ::py::arg("table_bsdf") = true,
+           ::py::arg("table_bsdf") = true, ::py::arg("table_fold") = true,
            ::py::arg("self_shadowing") = true,
            ::py::arg("near_field_below_cell") = true, ::py::arg("uv_scale") = 40.0, ::py::arg("max_steps") = 32,
            ::py::arg("max_segment") = 6.2832, ::py::arg("max_bend") = 0.05)
@@ -1143,6 +1148,7 @@ max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
       .def_property_readonly("table_min_cells",
                              [](const KnitMaterial& km) { return km.params().table_min_cells; })
       .def_property_readonly("table_bsdf", [](const KnitMaterial& km) { return km.params().table_bsdf; })
+      .def_property_readonly("table_fold", [](const KnitMaterial& km) { return km.params().table_fold; })
       .def_property_readonly("self_shadowing",
                              [](const KnitMaterial& km) { return km.params().self_shadowing; })
       .def_property_readonly("near_field_below_cell",

@@ -11,7 +11,9 @@ bool usable(Vec3 w) { return is_finite(w) && std::fabs(length2(w) - 1.0f) < 1e-3
 // lookup: f |wi.z| of the light that reaches the yarn (lit) and of all of
 // it (total), sample()'s density there, and the lit share q of the total
 // (one number for the three channels), which leaves the fabric; the rest
-// meets other yarn of the footprint first (Material::bounce_table).
+// meets other yarn of the footprint first (Material::bounce_table). A
+// folded table (TableBsdf::folded) has that rest summed into its values:
+// lit and total are the same, q is 1 and every sample leaves.
 struct TableAt {
   knit::k::kvec3 lit, total;
   float density = 0, q = 0;

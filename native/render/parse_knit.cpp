@@ -211,6 +211,7 @@ KnitDesc parse_knit_material(JsonObject& o, const std::string& dir, bool class_t
   mp.footprint_table = o.boolean("footprint_table", mp.footprint_table);
   mp.table_min_cells = float(o.number("table_min_cells", Range::closed(0.5, 1), mp.table_min_cells));
   mp.table_bsdf = o.boolean("table_bsdf", mp.table_bsdf);
+  mp.table_fold = o.boolean("table_fold", mp.table_fold);
   // (read either way, so that the key is still checked)
   if (!class_tables) mp.footprint_table = false;
   mp.self_shadowing = o.boolean("self_shadowing", mp.self_shadowing);

@@ -76,6 +76,12 @@ void mixed_sums(const TableBsdf::Mix& m, int slots, Block block, Entry entry, st
   }
 }
 
+// A node's (or a sum of nodes') sampling value: its four stored values
+// weighed by the mix's sw.
+float sampling_value(const TableBsdf::Mix& m, const F4& v) {
+  return m.sw[0] * v[0] + m.sw[1] * v[1] + m.sw[2] * v[2] + m.sw[3] * v[3];
+}
+
 // A 32-bit integer hash (the finaliser of MurmurHash3): every input bit
 // reaches every output bit.
 uint32_t hash32(uint32_t h) {
@@ -151,6 +157,7 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
   // The pole rows are one direction each: their first column is computed,
   // the others copy it (views) or its values (lights).
   const auto is_pole_copy = [](int node) { return (node / kPhi == 0 || node / kPhi == kTheta - 1) && node % kPhi; };
+  std::vector<double> hit_frac(size_t(slots_) * kNodes, 0.0);  // per slot and view node: hits / rays
   tbb::parallel_for(0, slots_ * kNodes, [&](int job) {
     const int slot = job / kNodes, view = job % kNodes;
     if (is_pole_copy(view)) return;
@@ -187,6 +194,7 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
       }
     }
     const double inv = hits ? 1.0 / hits : 0.0;
+    hit_frac[size_t(slot) * kNodes + size_t(view)] = double(hits) / rays;
     for (int l = 0; l < kNodes; ++l) {
       const size_t src = size_t(is_pole_copy(l) ? l - l % kPhi : l) * 3;
       uint16_t* out = &values_[((size_t(view) * kNodes + size_t(l)) * size_t(slots_) + size_t(slot)) * kValues];
@@ -201,27 +209,156 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
     }
   });
   const size_t view_block = size_t(kNodes) * size_t(slots_) * kValues;
+  for (int view = 0; view < kNodes; ++view) {
+    if (!is_pole_copy(view)) continue;
+    const uint16_t* src = &values_[size_t(view - view % kPhi) * view_block];
+    std::copy(src, src + view_block, &values_[size_t(view) * view_block]);
+    for (int slot = 0; slot < slots_; ++slot)
+      hit_frac[size_t(slot) * kNodes + size_t(view)] = hit_frac[size_t(slot) * kNodes + size_t(view - view % kPhi)];
+  }
+  if (material.params().table_fold && table.one_colour()) {
+    std::vector<double> cell_share(size_t(slots_), 0.0);
+    double cells_all = 0;
+    for (int slot = 0; slot < slots_; ++slot) {
+      cell_share[size_t(slot)] = double(cells[size_t(table.class_of_slot(slot))].size());
+      cells_all += cell_share[size_t(slot)];
+    }
+    for (double& c : cell_share) c /= std::max(cells_all, 1.0);
+    fold(material, cell_share, hit_frac);
+  }
   const auto row_sums = [&](int view, int i, int slot) {
     return &rows_[((size_t(view) * (kTheta + 1) + size_t(i)) * size_t(slots_) + size_t(slot)) * 4];
   };
   for (int view = 0; view < kNodes; ++view) {
-    if (is_pole_copy(view)) {
-      const uint16_t* src = &values_[size_t(view - view % kPhi) * view_block];
-      std::copy(src, src + view_block, &values_[size_t(view) * view_block]);
-    }
     // Row sums over solid angle, as stored (bfloat16), and their total.
     for (int slot = 0; slot < slots_; ++slot) {
       for (int l = 0; l < kNodes; ++l) {
         const std::array<float, 4> v = value(slot, view, l);
         float* r = row_sums(view, l / kPhi, slot);
-        for (int c = 0; c < 3; ++c) r[c] += cell_solid_angle(l / kPhi) * v[size_t(c)];
+        for (int c = 0; c < 4; ++c) r[c] += cell_solid_angle(l / kPhi) * v[size_t(c)];
       }
       float* total = row_sums(view, kTheta, slot);
       for (int i = 0; i < kTheta; ++i)
-        for (int c = 0; c < 3; ++c) total[c] += row_sums(view, i, slot)[c];
+        for (int c = 0; c < 4; ++c) total[c] += row_sums(view, i, slot)[c];
     }
   }
   seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+namespace {
+// Solves a x = b for the n columns of b (n x n, row-major, both), in
+// place, by Gaussian elimination with partial pivoting.
+void solve_in_place(std::vector<double>& a, std::vector<double>& b, int n) {
+  const auto A = [&](int i, int j) -> double& { return a[size_t(i) * size_t(n) + size_t(j)]; };
+  const auto B = [&](int i, int j) -> double& { return b[size_t(i) * size_t(n) + size_t(j)]; };
+  for (int k = 0; k < n; ++k) {
+    int p = k;
+    for (int i = k + 1; i < n; ++i)
+      if (std::fabs(A(i, k)) > std::fabs(A(p, k))) p = i;
+    if (p != k)
+      for (int j = 0; j < n; ++j) {
+        std::swap(A(k, j), A(p, j));
+        std::swap(B(k, j), B(p, j));
+      }
+    const double inv = 1.0 / A(k, k);
+    for (int i = k + 1; i < n; ++i) {
+      const double f = A(i, k) * inv;
+      if (f == 0) continue;
+      for (int j = k; j < n; ++j) A(i, j) -= f * A(k, j);
+      for (int j = 0; j < n; ++j) B(i, j) -= f * B(k, j);
+    }
+  }
+  for (int k = n - 1; k >= 0; --k) {
+    const double inv = 1.0 / A(k, k);
+    for (int j = 0; j < n; ++j) {
+      double v = B(k, j);
+      for (int i = k + 1; i < n; ++i) v -= A(k, i) * B(i, j);
+      B(k, j) = v * inv;
+    }
+  }
+}
+}  // namespace
+
+void TableBsdf::fold(const KnitMaterial& material, const std::vector<double>& cell_share,
+                     const std::vector<double>& hit_frac) {
+  // The walk (material_yarn.cpp, Material::bounce_table): at a yarn point
+  // seen from view v, light from l arrives lit (tot q) or meets other yarn
+  // of the footprint first (tot (1 - q)), yarn seen from -l, which scatters
+  // what reaches it in turn. On the nodes, with each light node's cell's
+  // solid angle as its quadrature weight and the reversed direction a node
+  // of the grid again (theta -> pi - theta, phi -> phi + pi):
+  //
+  //   F_s[v][l] = Lit_s[v][l] + sum_y Sh_s[v][rev y] omega(rev y) G[y][l],
+  //   G[y][l]   = sum_s pi_s(y) F_s[y][l],
+  //
+  // where G is the yarn met inside the footprint: any class, in proportion
+  // to its share of the hits seen from y (its share of the cells times its
+  // hit fraction from y), as a footprint of whole pattern repeats mixes
+  // them. G solves (I - K) G = Lbar with K[y][x] = Sbar[y][rev x]
+  // omega(rev x), Sbar and Lbar the pi-weighted Sh and Lit; then each F_s
+  // is one product. Linear in the yarn colours' powers, so per channel,
+  // with the material's one colour.
+  const YarnBsdfParams& bp = material.params().bsdf;
+  const Rgb kr = bp.reflect_colors[0], kt = bp.transmit_colors[0];
+  constexpr int N = kNodes;
+  const auto rev = [](int node) {
+    return (kTheta - 1 - node / kPhi) * kPhi + (node % kPhi + kPhi / 2) % kPhi;
+  };
+  const size_t S = size_t(slots_), NN = size_t(N) * size_t(N);
+  std::vector<double> pi(S * N, 0.0);
+  for (int y = 0; y < N; ++y) {
+    double sum = 0;
+    for (size_t s = 0; s < S; ++s) sum += cell_share[s] * hit_frac[s * N + size_t(y)];
+    for (size_t s = 0; s < S; ++s) pi[s * N + size_t(y)] = sum > 0 ? cell_share[s] * hit_frac[s * N + size_t(y)] / sum : 0;
+  }
+  std::vector<float> out(S * NN * 4, 0.0f);  // [slot][v][l][R, G, B, mean]
+  std::vector<double> lit(S * NN), sh(S * NN), a(NN), g(NN), shw(N);
+  for (int ch = 0; ch < 3; ++ch) {
+    const double kdr = ch == 0 ? kr.r : ch == 1 ? kr.g : kr.b, kdt = ch == 0 ? kt.r : ch == 1 ? kt.g : kt.b;
+    for (size_t s = 0; s < S; ++s)
+      for (int v = 0; v < N; ++v)
+        for (int l = 0; l < N; ++l) {
+          const std::array<float, 4> x = value(int(s), v, l);
+          const double tot = std::max(0.0, double(x[0]) + double(x[1]) * kdr + double(x[2]) * kdt);
+          const size_t i = s * NN + size_t(v) * N + size_t(l);
+          lit[i] = tot * double(x[3]);
+          sh[i] = tot - lit[i];
+        }
+    for (int y = 0; y < N; ++y)
+      for (int x = 0; x < N; ++x) {
+        const int l = rev(x);
+        double sbar = 0, lbar = 0;
+        for (size_t s = 0; s < S; ++s) {
+          const double w = pi[s * N + size_t(y)];
+          sbar += w * sh[s * NN + size_t(y) * N + size_t(l)];
+          lbar += w * lit[s * NN + size_t(y) * N + size_t(x)];
+        }
+        a[size_t(y) * N + size_t(x)] = (x == y ? 1.0 : 0.0) - sbar * double(cell_solid_angle(l / kPhi));
+        g[size_t(y) * N + size_t(x)] = lbar;
+      }
+    solve_in_place(a, g, N);
+    for (size_t s = 0; s < S; ++s)
+      for (int v = 0; v < N; ++v) {
+        for (int y = 0; y < N; ++y) {
+          const int l = rev(y);
+          shw[size_t(y)] = sh[s * NN + size_t(v) * N + size_t(l)] * double(cell_solid_angle(l / kPhi));
+        }
+        for (int l = 0; l < N; ++l) {
+          double f = lit[s * NN + size_t(v) * N + size_t(l)];
+          for (int y = 0; y < N; ++y) f += shw[size_t(y)] * g[size_t(y) * N + size_t(l)];
+          out[((s * N + size_t(v)) * N + size_t(l)) * 4 + size_t(ch)] = float(std::max(0.0, f));
+        }
+      }
+  }
+  for (size_t s = 0; s < S; ++s)
+    for (int v = 0; v < N; ++v)
+      for (int l = 0; l < N; ++l) {
+        const float* f = &out[((s * N + size_t(v)) * N + size_t(l)) * 4];
+        uint16_t* dst = &values_[((size_t(v) * N + size_t(l)) * S + s) * kValues];
+        for (int c = 0; c < 3; ++c) dst[c] = bf16(f[c]);
+        dst[3] = bf16((f[0] + f[1] + f[2]) / 3);
+      }
+  folded_ = true;
 }
 
 std::array<float, 4> TableBsdf::value(int slot, int view, int l) const {
@@ -233,6 +370,7 @@ TableBsdf::Mix TableBsdf::mix(const float* slot_hits, Vec3 wo, float cr, float c
   Mix m;
   m.cr = cr;
   m.ct = ct;
+  m.sw = folded_ ? std::array<float, 4>{0, 0, 0, 1} : std::array<float, 4>{1, cr, ct, 0};
   float total = 0;
   for (int s = 0; s < slots_; ++s) total += std::max(0.0f, slot_hits[s]);
   if (!(total > 0)) return m;
@@ -270,7 +408,7 @@ void TableBsdf::remix(Mix& m, Vec3 wo, float u_view) const {
   mixed_sums(
       m, slots_, [&](int view) { return rows_at(view, 0); }, [](const float* p, int i) { return load4(p + 4 * i); },
       sum);
-  for (int i = 0; i <= kTheta; ++i) m.rows[size_t(i)] = sum[size_t(i)][0] + m.cr * sum[size_t(i)][1] + m.ct * sum[size_t(i)][2];
+  for (int i = 0; i <= kTheta; ++i) m.rows[size_t(i)] = sampling_value(m, sum[size_t(i)]);
 }
 
 Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total, float* density_out) const {
@@ -280,6 +418,25 @@ Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total, f
   // nodes lie side by side. One sum per light node: four chains of
   // additions side by side, not one four times as long.
   F4 lit0{}, lit1{}, lit2{}, lit3{}, all0{}, all1{}, all2{}, all3{};
+  if (folded_) {
+    // The folded values: the channels themselves, nothing shadowed.
+    for (int t = 0; t < m.n; ++t) {
+      const int v = m.view[size_t(t)];
+      const uint16_t *p0 = at(v, c.node[0]), *p1 = at(v, c.node[1]), *p2 = at(v, c.node[2]), *p3 = at(v, c.node[3]);
+      for (int s = 0; s < slots_; ++s) {
+        const float ws = m.w[size_t(t)] * m.share[size_t(s)];
+        lit0 += (ws * c.w[0]) * bf16x4(p0 + kValues * s);
+        lit1 += (ws * c.w[1]) * bf16x4(p1 + kValues * s);
+        lit2 += (ws * c.w[2]) * bf16x4(p2 + kValues * s);
+        lit3 += (ws * c.w[3]) * bf16x4(p3 + kValues * s);
+      }
+    }
+    const F4 f = (lit0 + lit1) + (lit2 + lit3);
+    const Vec3 r = k::kv3(f[0], f[1], f[2]);
+    if (total) *total = r;
+    if (density_out) *density_out = density(m, c);
+    return r;
+  }
   for (int t = 0; t < m.n; ++t) {
     const int v = m.view[size_t(t)];
     const uint16_t *p0 = at(v, c.node[0]), *p1 = at(v, c.node[1]), *p2 = at(v, c.node[2]), *p3 = at(v, c.node[3]);
@@ -316,7 +473,7 @@ float TableBsdf::node_value(const Mix& m, int l) const {
   mixed_sums(
       m, slots_, [&](int view) { return at(view, l); },
       [](const uint16_t* p, int i) { return bf16x4(p + kValues * i); }, v);
-  return v[0][0] + m.cr * v[0][1] + m.ct * v[0][2];
+  return sampling_value(m, v[0]);
 }
 
 float TableBsdf::pdf(const Mix& m, Vec3 wi) const { return density(m, sphere_nodes(wi, kTheta, kPhi)); }
@@ -358,7 +515,7 @@ bool TableBsdf::sample(const Mix& m, float u0, float u1, float u2, Vec3& wi, flo
     float v = 0;
     for (; j < kPhi; ++j) {
       const F4& r = row[size_t(j)];
-      v = (r[0] + m.cr * r[1] + m.ct * r[2]) * om;
+      v = sampling_value(m, r) * om;
       if (target < v || j == kPhi - 1) break;
       target -= v;
     }

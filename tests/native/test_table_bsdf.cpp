@@ -17,15 +17,17 @@ namespace {
 
 using namespace knit;
 
-KnitMaterial seed_material(bool self_shadowing = true) {
+// Seed stitch, or the pattern given; fold: the walk summed into the table
+// (TableBsdf::folded), else the table of single scattering.
+KnitMaterial seed_material(bool fold = true, const char* pattern = "KP\nPK\n") {
   KnitMaterialParams mp;
   mp.mode = KnitMode::MultiScale;
-  mp.self_shadowing = self_shadowing;
+  mp.table_fold = fold;
   mp.bsdf.reflect_colors = {Rgb{0.72f, 0.18f, 0.14f}};
   mp.bsdf.transmit_colors = mp.bsdf.reflect_colors;
   mp.bsdf.body_energy = 0.85f;
   mp.bsdf.body_reflect = 0.7f;
-  return KnitMaterial(Pattern::parse("KP\nPK\n"), mp);
+  return KnitMaterial(Pattern::parse(pattern), mp);
 }
 
 // f |wi.n| V of the near field, summed in double precision over `rays`
@@ -63,9 +65,10 @@ std::array<double, 3> shading_mean(const KnitMaterial& mat, int slot, Vec3 wo, V
 }
 
 TEST(TableBsdf, NodesHoldTheNearFieldShadingOfTheirClass) {
-  const KnitMaterial mat = seed_material();
+  const KnitMaterial mat = seed_material(false);
   const TableBsdf* tb = mat.table_bsdf();
   ASSERT_NE(tb, nullptr);
+  ASSERT_FALSE(tb->folded());
   constexpr int P = TableBsdf::kPhi;
   // (view node, light node): in front at 33 and 49 degrees, grazing, and
   // lights behind.
@@ -104,9 +107,11 @@ TEST(TableBsdf, NodesHoldTheNearFieldShadingOfTheirClass) {
 }
 
 TEST(TableBsdf, SamplingDensityIntegratesToOneAndItsSamplesFollowIt) {
-  const KnitMaterial mat = seed_material();
+  for (const bool fold : {false, true}) {
+  const KnitMaterial mat = seed_material(fold);
   const TableBsdf* tb = mat.table_bsdf();
   ASSERT_NE(tb, nullptr);
+  ASSERT_EQ(tb->folded(), fold);
   const Vec3 kd = k::kv3(0.72f, 0.18f, 0.14f);
   const float cr = (kd.x + kd.y + kd.z) / 3;
   float w[FootprintTable::kClasses] = {0.3f, 0.7f};
@@ -142,10 +147,11 @@ TEST(TableBsdf, SamplingDensityIntegratesToOneAndItsSamplesFollowIt) {
     }
     est /= n;
     const double sd = std::sqrt(std::max(0.0, est2 / n - est * est) / n);
-    std::printf("[table-bsdf] wo.z %+.2f: integral of the density %.4f; of f %.5f, sampled %.5f +- %.5f\n", wo.z,
-                pdf_sum, f_sum, est, sd);
+    std::printf("[table-bsdf] %s, wo.z %+.2f: integral of the density %.4f; of f %.5f, sampled %.5f +- %.5f\n",
+                fold ? "folded" : "single scattering", wo.z, pdf_sum, f_sum, est, sd);
     EXPECT_NEAR(pdf_sum, 1.0, 0.01);
     EXPECT_NEAR(est, f_sum, 4 * sd + 0.005 * f_sum);
+  }
   }
 }
 
@@ -155,7 +161,8 @@ TEST(TableBsdf, SamplingDensityIntegratesToOneAndItsSamplesFollowIt) {
 // the mix's weights, so the expectation is a sum over the four intervals
 // of u_view.)
 TEST(TableBsdf, OneViewNodeIsTheBlendInExpectation) {
-  const KnitMaterial mat = seed_material();
+  for (const bool fold : {false, true}) {
+  const KnitMaterial mat = seed_material(fold);
   const TableBsdf* tb = mat.table_bsdf();
   ASSERT_NE(tb, nullptr);
   const Vec3 kd = k::kv3(0.72f, 0.18f, 0.14f);
@@ -182,8 +189,92 @@ TEST(TableBsdf, OneViewNodeIsTheBlendInExpectation) {
     }
     const Vec3 fb = tb->eval(blend, wi, kd, kd);
     for (const auto& [a, b] : {std::pair{f.x, fb.x}, std::pair{f.y, fb.y}, std::pair{f.z, fb.z}})
-      EXPECT_NEAR(a, b, 1e-5f + 1e-4f * b) << "trial " << trial;
+      EXPECT_NEAR(a, b, 1e-5f + 1e-4f * b) << "trial " << trial << (fold ? ", folded" : "");
   }
+  }
+}
+
+// The folded table must be the walk's expectation (Material::bounce_table,
+// as render/material_yarn.cpp runs it: a direction from the single-
+// scattering table's total, leaving with its lit share, else scattering
+// again on the same classes seen from -wi). On stockinette, one class, the
+// fold's mean yarn met inside the footprint is that class, so the two are
+// the same model: what differs is the fold's node quadrature against the
+// walk's bilinear lookups and sampled directions. Checked over a smooth
+// weighting of the leaving directions, g(wi) = 1 + 0.8 wi.d, for views in
+// front and behind: the walk by Monte Carlo, the folded table by
+// quadrature.
+TEST(TableBsdf, FoldedTableIsTheWalkInExpectation) {
+  const KnitMaterial walk_mat = seed_material(false, "K\n"), fold_mat = seed_material(true, "K\n");
+  const TableBsdf *walk = walk_mat.table_bsdf(), *fold = fold_mat.table_bsdf();
+  ASSERT_NE(walk, nullptr);
+  ASSERT_NE(fold, nullptr);
+  ASSERT_FALSE(walk->folded());
+  ASSERT_TRUE(fold->folded());
+  const Vec3 kd = k::kv3(0.72f, 0.18f, 0.14f);
+  const Vec3 d = k::kv3_normalize(k::kv3(0.3f, -0.4f, 0.87f));
+  const auto g = [&](Vec3 w) { return 1.0 + 0.8 * double(k::kv3_dot(w, d)); };
+  const float hits[FootprintTable::kClasses] = {1};
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(0, 1);
+  double worst = 0;
+  for (const Vec3 wo : {k::kv3_normalize(k::kv3(0.2f, -0.5f, 0.84f)), k::kv3_normalize(k::kv3(-0.6f, 0.2f, 0.3f)),
+                        k::kv3_normalize(k::kv3(-0.3f, 0.1f, -0.7f))}) {
+    // The folded table, by midpoint quadrature over (cos theta, phi).
+    const TableBsdf::Mix fm = fold->mix(hits, wo, 0, 0);
+    const int nz = 400, np = 800;
+    double want[3] = {0, 0, 0};
+    for (int i = 0; i < nz; ++i)
+      for (int j = 0; j < np; ++j) {
+        const double z = -1 + 2 * (i + 0.5) / nz, ph = 2 * M_PI * (j + 0.5) / np, s = std::sqrt(1 - z * z);
+        const Vec3 w = k::kv3(float(s * std::cos(ph)), float(s * std::sin(ph)), float(z));
+        const Vec3 f = fold->eval(fm, w, kd, kd);
+        const double dw = (2.0 / nz) * (2 * M_PI / np) * g(w);
+        want[0] += f.x * dw;
+        want[1] += f.y * dw;
+        want[2] += f.z * dw;
+      }
+    // The walk, per channel: each walk's estimate, summed.
+    const int n = 200000;
+    double est[3] = {0, 0, 0}, est2[3] = {0, 0, 0};
+    for (int i = 0; i < n; ++i) {
+      TableBsdf::Mix m = walk->mix(hits, wo, (kd.x + kd.y + kd.z) / 3, (kd.x + kd.y + kd.z) / 3);
+      double beta[3] = {1, 1, 1}, got[3] = {0, 0, 0};
+      for (int bounce = 0; bounce < 64; ++bounce) {
+        Vec3 wi;
+        float pdf = 0;
+        ASSERT_TRUE(walk->sample(m, u(rng), u(rng), u(rng), wi, &pdf));
+        Vec3 total;
+        const Vec3 lit = walk->eval(m, wi, kd, kd, &total);
+        const float lt = lit.x + lit.y + lit.z, tt = total.x + total.y + total.z;
+        const float q = tt > 0 ? std::min(1.0f, lt / tt) : 0.0f;
+        if (u(rng) < q) {
+          const double w = g(wi) / (double(pdf) * q);
+          got[0] += beta[0] * lit.x * w;
+          got[1] += beta[1] * lit.y * w;
+          got[2] += beta[2] * lit.z * w;
+          break;
+        }
+        const double w = 1 / (double(pdf) * (1 - q));
+        beta[0] *= (total.x - lit.x) * w;
+        beta[1] *= (total.y - lit.y) * w;
+        beta[2] *= (total.z - lit.z) * w;
+        walk->remix(m, k::kv3_neg(wi));
+      }
+      for (int c = 0; c < 3; ++c) {
+        est[c] += got[c];
+        est2[c] += got[c] * got[c];
+      }
+    }
+    for (int c = 0; c < 3; ++c) {
+      const double mean = est[c] / n, sd = std::sqrt(std::max(0.0, est2[c] / n - mean * mean) / n);
+      std::printf("[table-bsdf] wo (%+.2f, %+.2f, %+.2f) channel %d: folded %.5f, walk %.5f +- %.5f (%+.4f)\n", wo.x,
+                  wo.y, wo.z, c, want[c], mean, sd, want[c] / mean - 1);
+      worst = std::max(worst, std::fabs(want[c] / mean - 1));
+      EXPECT_NEAR(want[c], mean, 4 * sd + 0.01 * mean) << "channel " << c;
+    }
+  }
+  std::printf("[table-bsdf] folded against the walk: worst relative difference %.4f\n", worst);
 }
 
 TEST(TableBsdf, BuiltOnlyWithTheClassTableAndTableBsdf) {

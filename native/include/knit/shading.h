@@ -46,6 +46,11 @@ struct KnitMaterialParams {
   // false: the yarn BSDF at the footprint's mean normal, its lobes widened
   // by the normals' spread (LEAN), without self-shadowing.
   bool table_bsdf = true;
+  // With table_bsdf, for patterns of one colour index: the light that meets
+  // other yarn of a footprint first, and scatters there, is summed into the
+  // table when it is built (TableBsdf::folded), not followed by the
+  // renderer's walk (Material::bounce_table); false: the walk.
+  bool table_fold = true;
   bool self_shadowing = true;   // near field: light and bounces from a yarn hit cross the rest of the shell
   // Multi-scale: a footprint below a stitch cell (in either direction) is
   // shaded as the near field at the hit (the pixel's samples cover the

@@ -72,10 +72,13 @@ class TableBsdf {
     std::array<int32_t, 4> view{};
     std::array<float, 4> w{};
     std::array<float, FootprintTable::kClasses> share{};  // the classes' shares of the hits
-    // Sampling: the body colours' channel means, and the mix's sampling
-    // values (A + cr Br + ct Bt) summed over each theta row's cells times
-    // their solid angle, and over the sphere (at kTheta).
+    // Sampling: the body colours' channel means; the weights of the four
+    // stored values in a node's sampling value (1, cr, ct, 0: A + cr Br +
+    // ct Bt; folded, 0, 0, 0, 1: the channels' mean); and the mix's
+    // sampling values summed over each theta row's cells times their solid
+    // angle, and over the sphere (at kTheta).
     float cr = 0, ct = 0;
+    std::array<float, 4> sw{};
     std::array<float, kTheta + 1> rows{};
   };
   Mix mix(const float* slot_hits, Vec3 wo, float cr, float ct, float u_view = -1) const;
@@ -86,7 +89,9 @@ class TableBsdf {
   // channel, with body colours kd_r, kd_t: the light that reaches the
   // yarn points along wi. `total`, when given, receives f |wi.z| without
   // V: the lit part and the part shadowed by other yarn together; `density`
-  // receives pdf(m, wi) from the same direction lookup.
+  // receives pdf(m, wi) from the same direction lookup. Folded (below):
+  // the folded values, whose colours are the material's own (kd_r and
+  // kd_t unused), and `total` the same, since nothing is shadowed.
   Vec3 eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total = nullptr, float* density = nullptr) const;
   // The sampling density of sample() (solid angle): piecewise constant per
   // light node's cell, in proportion to the mix's total (lit and shadowed)
@@ -103,11 +108,20 @@ class TableBsdf {
   // direction where the tabulated value is not zero).
   static constexpr float kUniform = 0.15f;
 
+  // Folded: the table holds, per class and pair of nodes, the light from
+  // wi that reaches the footprint's yarn directly or after any number of
+  // scatterings off other yarn of the footprint, towards wo, in the
+  // material's colour (RGB, and their mean for sampling): the walk through
+  // the shadowed part (Material::bounce_table), summed at build time. Built
+  // so for patterns of one colour index with KnitMaterialParams::table_fold
+  // (docs/multiscale.md, "The walk folded into the table").
+  bool folded() const { return folded_; }
+
   size_t bytes() const { return sizeof(*this) + values_.size() * sizeof(uint16_t) + rows_.size() * sizeof(float); }
   double build_seconds() const { return seconds_; }
   // The tabulated A, Br, Bt (without V) and the lit share of class slot
-  // `slot`, view node `view`, light node `light` (as stored), for tests;
-  // and a node's direction.
+  // `slot`, view node `view`, light node `light` (as stored; folded: red,
+  // green, blue and their mean), for tests; and a node's direction.
   std::array<float, 4> value(int slot, int view, int light) const;
   static Vec3 node_direction(int node);
 
@@ -120,8 +134,13 @@ class TableBsdf {
   // The mix's sampling value at light node l (A + cr Br + ct Bt).
   float node_value(const Mix& m, int l) const;
 
+  // The walk folded into the values (folded()): per class slot, its share
+  // of the cells and, per view node, its hit fraction.
+  void fold(const KnitMaterial& material, const std::vector<double>& cell_share, const std::vector<double>& hit_frac);
+
   static constexpr int kValues = 4;
   int slots_ = 0;
+  bool folded_ = false;
   // The classes' stored values at a pair of nodes, and the classes' row
   // sums at a view node and theta row.
   const uint16_t* at(int view, int light) const {
@@ -134,7 +153,7 @@ class TableBsdf {
   // classes of one pair of nodes side by side, as a footprint mixes them
   // (one or two cache lines per lookup).
   std::vector<uint16_t> values_;
-  // [view node][theta row, then the sphere][slot][A, Br, Bt, unused]: the
+  // [view node][theta row, then the sphere][slot][A, Br, Bt, lit share]: the
   // values summed over the row's light nodes times their cells' solid
   // angle, and over all rows (sample, pdf; four floats for four lanes).
   std::vector<float> rows_;
