@@ -205,6 +205,31 @@ TEST(TableBsdf, OneViewNodeIsTheBlendInExpectation) {
 // front and behind: the walk by Monte Carlo, the folded table by
 // quadrature.
 TEST(TableBsdf, FoldedTableIsTheWalkInExpectation) {
+  // The fold's quadrature weights: each node's row of overlaps sums to the
+  // integral of its hat function, in closed form (linear in theta over
+  // the neighbouring rows, in phi over the neighbouring columns).
+  {
+    const std::vector<double>& om = TableBsdf::sphere_overlaps();
+    constexpr int T = TableBsdf::kTheta, P = TableBsdf::kPhi, N = TableBsdf::kNodes;
+    const double h = M_PI / (T - 1), dphi = 2 * M_PI / P;
+    double all = 0, worst = 0;
+    for (int a = 0; a < N; ++a) {
+      double row = 0;
+      for (int b = 0; b < N; ++b) {
+        row += om[size_t(a) * N + size_t(b)];
+        ASSERT_EQ(om[size_t(a) * N + size_t(b)], om[size_t(b) * N + size_t(a)]);
+      }
+      const int i = a / P;
+      const double want = (i == 0 || i == T - 1) ? dphi * (1 - std::sin(h) / h)
+                                                 : dphi * 2 * std::sin(i * h) * (1 - std::cos(h)) / h;
+      worst = std::max(worst, std::fabs(row / want - 1));
+      all += row;
+    }
+    std::printf("[table-bsdf] hat overlaps: worst row %.2e from its closed form, sphere %.6f (4 pi %.6f)\n", worst,
+                all, 4 * M_PI);
+    EXPECT_LT(worst, 1e-3);
+    EXPECT_NEAR(all, 4 * M_PI, 1e-4);
+  }
   const KnitMaterial walk_mat = seed_material(false, "K\n"), fold_mat = seed_material(true, "K\n");
   const TableBsdf *walk = walk_mat.table_bsdf(), *fold = fold_mat.table_bsdf();
   ASSERT_NE(walk, nullptr);

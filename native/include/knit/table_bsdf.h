@@ -27,7 +27,9 @@
 // p_delta). The shadowed rest is light that meets other yarn of the
 // footprint first: the renderer's walk scatters it there again
 // (Material::bounce_table), taking that yarn as the footprint's classes
-// seen from the other way. What it leaves out: the base's curvature, and
+// seen from the other way; for patterns of one colour index that walk is
+// summed into the table as it is built (folded()), and the values are then
+// the material's colours. What it leaves out: the base's curvature, and
 // the sub-cells' own shading (a footprint below a cell mixes its classes'
 // tables by the sub-cells' hit fractions).
 #pragma once
@@ -124,6 +126,10 @@ class TableBsdf {
   // green, blue and their mean), for tests; and a node's direction.
   std::array<float, 4> value(int slot, int view, int light) const;
   static Vec3 node_direction(int node);
+  // The overlaps of the nodes' bilinear hat functions (eval's
+  // interpolation) over the sphere, kNodes x kNodes, symmetric: the fold's
+  // quadrature weights. Computed once.
+  static const std::vector<double>& sphere_overlaps();
 
  private:
   // The density of sample() in the cell of the node nearest to a
@@ -137,6 +143,7 @@ class TableBsdf {
   // The walk folded into the values (folded()): per class slot, its share
   // of the cells and, per view node, its hit fraction.
   void fold(const KnitMaterial& material, const std::vector<double>& cell_share, const std::vector<double>& hit_frac);
+
 
   static constexpr int kValues = 4;
   int slots_ = 0;
