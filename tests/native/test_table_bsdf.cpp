@@ -227,8 +227,8 @@ TEST(TableBsdf, FoldedTableIsTheWalkInExpectation) {
     }
     std::printf("[table-bsdf] hat overlaps: worst row %.2e from its closed form, sphere %.6f (4 pi %.6f)\n", worst,
                 all, 4 * M_PI);
-    EXPECT_LT(worst, 1e-3);
-    EXPECT_NEAR(all, 4 * M_PI, 1e-4);
+    EXPECT_LT(worst, 1e-5);  // (the table's pi is a float)
+    EXPECT_NEAR(all, 4 * M_PI, 1e-6);
   }
   const KnitMaterial walk_mat = seed_material(false, "K\n"), fold_mat = seed_material(true, "K\n");
   const TableBsdf *walk = walk_mat.table_bsdf(), *fold = fold_mat.table_bsdf();

@@ -784,6 +784,16 @@ class KnitMaterialMultiScale(unittest.TestCase):
         np.testing.assert_allclose(a["alpha"][h, 0] * a["alpha"][h, 1], 0.15 * 0.45, rtol=1e-5)
         with self.assertRaises(TypeError):
             knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", table_bsdf="yes")
+        # The walk folded into the table (one colour index) is the default;
+        # table_fold=False keeps the table of single scattering, at the same
+        # size.
+        walk = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0,
+                                      table_fold=False)
+        self.assertTrue(m.table_fold)
+        self.assertFalse(walk.table_fold)
+        self.assertEqual(m.state_bytes, walk.state_bytes)
+        with self.assertRaises(TypeError):
+            knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", table_fold="no")
 
     def test_sub_cells_come_from_the_table(self):
         # By default (table_min_cells=0.5) a footprint of half a cell to a

@@ -237,7 +237,7 @@ TEST(SceneParse, KnitMaterialMapsOntoTheModel) {
                "eta": 1.4, "body_energy": 0.9, "body_reflect": 0.3, "optical_depth": 2},
       "ply": {"ply_count": 2, "ply_twist": 45, "fiber_count": 20, "fiber_twist": -10},
       "mode": "multi_scale", "capm": false, "footprint_points": 8, "frames": "curvature", "explicit_samples": 12,
-      "footprint_table": false, "table_min_cells": 0.75, "table_bsdf": false, "self_shadowing": false,
+      "footprint_table": false, "table_min_cells": 0.75, "table_bsdf": false, "table_fold": false, "self_shadowing": false,
       "near_field_below_cell": false})");
   const SceneDesc d = parse(j);
   const KnitDesc& k = d.materials[1].knit;
@@ -270,6 +270,7 @@ TEST(SceneParse, KnitMaterialMapsOntoTheModel) {
   EXPECT_FALSE(p.footprint_table);
   EXPECT_FLOAT_EQ(p.table_min_cells, 0.75f);
   EXPECT_FALSE(p.table_bsdf);
+  EXPECT_FALSE(p.table_fold);
   EXPECT_FALSE(p.self_shadowing);
   EXPECT_FALSE(p.near_field_below_cell);
   EXPECT_EQ(k.frames, KnitFrames::Curvature);
