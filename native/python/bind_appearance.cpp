@@ -1105,10 +1105,11 @@ the table's sub-cell statistics. table_bsdf: the table's footprints are
 shaded with a tabulated BSDF built with it (the near field's shading and
 self-shadowing averaged per class and pair of directions); False: the yarn
 BSDF at the footprint's mean normal with LEAN-widened lobes and no
-self-shadowing. table_fold: with table_bsdf and a pattern of one colour
-index, the light that meets other yarn of the footprint and scatters there
-is summed into the table as it is built (a renderer's path then never
-walks inside the footprint); False: renderers follow it by a random walk.
+self-shadowing. table_fold: with table_bsdf, the light that meets other
+yarn of the footprint and scatters there is summed into the table as it is
+built, per class and colour of the palette when there are at most 16 of
+them (a renderer's path then never walks inside the footprint); False:
+renderers follow it by a random walk.
 self_shadowing: near field, light and bounced rays from a yarn
 hit cross the rest of the yarn shell (KnitMaterial.occluded_from,
 shade_from) before they leave it. near_field_below_cell: a multi-scale

@@ -333,15 +333,20 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     sh.point.layers = std::max(1, round_count(a.layers));
     sh.point.shadow = mean_shadow_;
     // Body colour: the palette mixed by the footprint's colour histogram, or
-    // (more colours than the histogram has bins) the colour of one hit.
+    // (more colours than the histogram has bins) the colour of one hit; the
+    // same weights for a folded tabulated BSDF's colours.
+    std::array<float, TableBsdf::kMaxEntries> colour_w{};
+    const float* cw = a.color_w;
     if (bp.num_colors() > KNIT_MS_COLORS) {
       set_colors(sh, a.color_pick);
+      colour_w[size_t(std::clamp(sh.point.color, 0, TableBsdf::kMaxEntries - 1))] = 1;
+      cw = colour_w.data();
     } else if (bp.num_colors() == 1 && a.color_w[0] == 1.0f) {
       set_colors(sh, 0);  // what mixing the one colour at weight 1 gives, bit for bit
     } else {
       mix_colors(sh, a.color_w);
     }
-    if (mix_out && use_table_bsdf(hit, wi, slot_hits.data(), u, sh)) {
+    if (mix_out && use_table_bsdf(hit, wi, slot_hits.data(), u, sh, cw)) {
       const Vec3 d = k::kv3_sub(a.position, k::kv3(x, y, top));
       sh.offset = k::kv3_scale(to_world(d, hit.t, hit.b, hit.n), 1.0f / S);
       return sh;
@@ -487,13 +492,13 @@ float KnitMaterial::transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameP
   return march(hit, ray_dir, frame, true).state == KNIT_CAPM_HIT ? 0.0f : 1.0f;
 }
 
-bool KnitMaterial::use_table_bsdf(const BaseHit& hit, Vec3 wi, const float* slot_hits, float u,
-                                  KnitShade& sh) const {
+bool KnitMaterial::use_table_bsdf(const BaseHit& hit, Vec3 wi, const float* slot_hits, float u, KnitShade& sh,
+                                  const float* colour_w) const {
   // The caller's number past the pass through the gaps: uniform again.
   const float p = sh.point.p_delta;
   const float u_mix = u >= 0 && p < 1 ? std::clamp((u - p) / (1 - p), 0.0f, 0.99999994f) : -1.0f;
   sh.mix = table_bsdf_->mix(slot_hits, wi, (sh.kd_r.r + sh.kd_r.g + sh.kd_r.b) / 3,
-                            (sh.kd_t.r + sh.kd_t.g + sh.kd_t.b) / 3, u_mix);
+                            (sh.kd_t.r + sh.kd_t.g + sh.kd_t.b) / 3, u_mix, colour_w);
   if (sh.mix.n == 0) return false;  // (no class with hits to weigh)
   sh.table_bsdf = table_bsdf_.get();
   sh.st = hit.t;  // the base's frame: fabric x, y and front normal

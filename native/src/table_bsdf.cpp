@@ -149,9 +149,8 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
   const int rays = std::max(1, hits_per_view);
   const int stride = std::max(1, march_stride);
   const int marches = std::max(1, rays / stride);
-  slots_ = table.classes_present();
+  slots_ = classes_ = table.classes_present();
   values_.assign(size_t(slots_) * kNodes * kNodes * kValues, 0);
-  rows_.assign(size_t(slots_) * kNodes * (kTheta + 1) * 4, 0.0f);
   std::array<Vec3, kNodes> light;
   for (int l = 0; l < kNodes; ++l) light[size_t(l)] = node_direction(l);
   // The pole rows are one direction each: their first column is computed,
@@ -216,7 +215,8 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
     for (int slot = 0; slot < slots_; ++slot)
       hit_frac[size_t(slot) * kNodes + size_t(view)] = hit_frac[size_t(slot) * kNodes + size_t(view - view % kPhi)];
   }
-  if (material.params().table_fold && table.one_colour()) {
+  const int palette = table.one_colour() ? 1 : material.params().bsdf.num_colors();
+  if (material.params().table_fold && classes_ * palette <= kMaxEntries) {
     std::vector<double> cell_share(size_t(slots_), 0.0);
     double cells_all = 0;
     for (int slot = 0; slot < slots_; ++slot) {
@@ -224,8 +224,9 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
       cells_all += cell_share[size_t(slot)];
     }
     for (double& c : cell_share) c /= std::max(cells_all, 1.0);
-    fold(material, cell_share, hit_frac);
+    fold(material, palette, cell_share, hit_frac);
   }
+  rows_.assign(size_t(slots_) * kNodes * (kTheta + 1) * 4, 0.0f);
   const auto row_sums = [&](int view, int i, int slot) {
     return &rows_[((size_t(view) * (kTheta + 1) + size_t(i)) * size_t(slots_) + size_t(slot)) * 4];
   };
@@ -311,7 +312,7 @@ const std::vector<double>& TableBsdf::sphere_overlaps() {
   return overlaps;
 }
 
-void TableBsdf::fold(const KnitMaterial& material, const std::vector<double>& cell_share,
+void TableBsdf::fold(const KnitMaterial& material, int colours, const std::vector<double>& cell_share,
                      const std::vector<double>& hit_frac) {
   // The walk (material_yarn.cpp, Material::bounce_table): at a yarn point
   // seen from view v, light from l arrives lit (tot q) or meets other yarn
@@ -328,8 +329,9 @@ void TableBsdf::fold(const KnitMaterial& material, const std::vector<double>& ce
   // hit fraction from y), as a footprint of whole pattern repeats mixes
   // them. G solves (I - K) G = Lbar with K[y][x] = Sbar[y][rev x]
   // omega(rev x), Sbar and Lbar the pi-weighted Sh and Lit; then each F_s
-  // is one product. Linear in the yarn colours' powers, so per channel,
-  // with the material's one colour.
+  // is one product. Not linear in the yarn colours, so per channel and per
+  // colour of the palette: yarn met inside a footprint takes its colour
+  // (a footprint of several colours mixes their entries).
   //
   // The quadrature is the walk's own: eval interpolates bilinearly in theta
   // and phi, both at the shadowed light direction w and at the view -w of
@@ -339,7 +341,6 @@ void TableBsdf::fold(const KnitMaterial& material, const std::vector<double>& ce
   // With each node's cell's solid angle on the diagonal instead (the hats'
   // lumped mass), the fold came out 0.2-0.5% brighter than the walk.
   const YarnBsdfParams& bp = material.params().bsdf;
-  const Rgb kr = bp.reflect_colors[0], kt = bp.transmit_colors[0];
   constexpr int N = kNodes;
   const std::vector<double>& omega = sphere_overlaps();
   const auto rev = [](int node) {
@@ -352,9 +353,13 @@ void TableBsdf::fold(const KnitMaterial& material, const std::vector<double>& ce
     for (size_t s = 0; s < S; ++s) sum += cell_share[s] * hit_frac[s * N + size_t(y)];
     for (size_t s = 0; s < S; ++s) pi[s * N + size_t(y)] = sum > 0 ? cell_share[s] * hit_frac[s * N + size_t(y)] / sum : 0;
   }
-  std::vector<float> out(S * NN * 4, 0.0f);  // [slot][v][l][R, G, B, mean]
-  tbb::parallel_for(0, 3, [&](int ch) {  // the channels apart
+  const size_t K = size_t(colours);
+  std::vector<float> out(K * S * NN * 4, 0.0f);  // [colour][slot][v][l][R, G, B, mean]
+  tbb::parallel_for(0, 3 * colours, [&](int job) {  // the colours' channels apart
+    const int ch = job % 3;
+    const size_t k = size_t(job / 3);
     std::vector<double> lit(S * NN), sh(S * NN), a(NN), g(NN), shw(N);
+    const Rgb kr = bp.reflect_colors[k], kt = bp.transmit_colors[k];
     const double kdr = ch == 0 ? kr.r : ch == 1 ? kr.g : kr.b, kdt = ch == 0 ? kt.r : ch == 1 ? kt.g : kt.b;
     for (size_t s = 0; s < S; ++s)
       for (int v = 0; v < N; ++v)
@@ -397,18 +402,24 @@ void TableBsdf::fold(const KnitMaterial& material, const std::vector<double>& ce
         for (int l = 0; l < N; ++l) {
           double f = lit[s * NN + size_t(v) * N + size_t(l)];
           for (int y = 0; y < N; ++y) f += shw[size_t(y)] * g[size_t(y) * N + size_t(l)];
-          out[((s * N + size_t(v)) * N + size_t(l)) * 4 + size_t(ch)] = float(std::max(0.0, f));
+          out[(((k * S + s) * N + size_t(v)) * N + size_t(l)) * 4 + size_t(ch)] = float(std::max(0.0, f));
         }
       }
   });
-  for (size_t s = 0; s < S; ++s)
-    for (int v = 0; v < N; ++v)
-      for (int l = 0; l < N; ++l) {
-        const float* f = &out[((s * N + size_t(v)) * N + size_t(l)) * 4];
-        uint16_t* dst = &values_[((size_t(v) * N + size_t(l)) * S + s) * kValues];
-        for (int c = 0; c < 3; ++c) dst[c] = bf16(f[c]);
-        dst[3] = bf16((f[0] + f[1] + f[2]) / 3);
-      }
+  // Entry s * K + k: class slot s in colour k.
+  const size_t E = S * K;
+  values_.assign(E * NN * kValues, 0);
+  for (size_t k = 0; k < K; ++k)
+    for (size_t s = 0; s < S; ++s)
+      for (int v = 0; v < N; ++v)
+        for (int l = 0; l < N; ++l) {
+          const float* f = &out[(((k * S + s) * N + size_t(v)) * N + size_t(l)) * 4];
+          uint16_t* dst = &values_[((size_t(v) * N + size_t(l)) * E + s * K + k) * kValues];
+          for (int c = 0; c < 3; ++c) dst[c] = bf16(f[c]);
+          dst[3] = bf16((f[0] + f[1] + f[2]) / 3);
+        }
+  slots_ = int(E);
+  colours_ = colours;
   folded_ = true;
 }
 
@@ -417,15 +428,31 @@ std::array<float, 4> TableBsdf::value(int slot, int view, int l) const {
   return {from_bf16(p[0]), from_bf16(p[1]), from_bf16(p[2]), from_bf16(p[3])};
 }
 
-TableBsdf::Mix TableBsdf::mix(const float* slot_hits, Vec3 wo, float cr, float ct, float u_view) const {
+TableBsdf::Mix TableBsdf::mix(const float* slot_hits, Vec3 wo, float cr, float ct, float u_view,
+                              const float* colour_w) const {
   Mix m;
   m.cr = cr;
   m.ct = ct;
   m.sw = folded_ ? std::array<float, 4>{0, 0, 0, 1} : std::array<float, 4>{1, cr, ct, 0};
   float total = 0;
-  for (int s = 0; s < slots_; ++s) total += std::max(0.0f, slot_hits[s]);
+  for (int s = 0; s < classes_; ++s) total += std::max(0.0f, slot_hits[s]);
   if (!(total > 0)) return m;
-  for (int s = 0; s < slots_; ++s) m.share[size_t(s)] = std::max(0.0f, slot_hits[s]) / total;
+  if (colours_ == 1) {
+    for (int s = 0; s < classes_; ++s) m.share[size_t(s)] = std::max(0.0f, slot_hits[s]) / total;
+  } else {
+    // Per class and colour: the class's share times the colour's.
+    float cw[kMaxEntries] = {1}, csum = 0;
+    if (colour_w)
+      for (int k = 0; k < colours_; ++k) cw[k] = std::max(0.0f, colour_w[k]);
+    for (int k = 0; k < colours_; ++k) csum += cw[k];
+    if (!(csum > 0)) {
+      cw[0] = 1;
+      csum = 1;
+    }
+    for (int s = 0; s < classes_; ++s)
+      for (int k = 0; k < colours_; ++k)
+        m.share[size_t(s * colours_ + k)] = std::max(0.0f, slot_hits[s]) / total * (cw[k] / csum);
+  }
   remix(m, wo, u_view);
   return m;
 }

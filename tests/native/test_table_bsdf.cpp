@@ -194,16 +194,87 @@ TEST(TableBsdf, OneViewNodeIsTheBlendInExpectation) {
   }
 }
 
+// The folded table `fold` against the walk on the single-scattering table
+// `walk` with body colour kd (both colours): the light leaving towards a
+// smooth weighting of the directions, g(wi) = 1 + 0.8 wi.d, for views in
+// front, grazing and behind: the walk by Monte Carlo, the folded table by
+// quadrature, with the footprint's colour shares colour_w. Expects them
+// within 4 sigma + 1% per channel; returns the worst relative difference.
+double fold_against_walk(const TableBsdf& walk, const TableBsdf& fold, Vec3 kd, const float* colour_w) {
+  const Vec3 d = k::kv3_normalize(k::kv3(0.3f, -0.4f, 0.87f));
+  const auto g = [&](Vec3 w) { return 1.0 + 0.8 * double(k::kv3_dot(w, d)); };
+  const float hits[FootprintTable::kClasses] = {1};
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(0, 1);
+  double worst = 0;
+  for (const Vec3 wo : {k::kv3_normalize(k::kv3(0.2f, -0.5f, 0.84f)), k::kv3_normalize(k::kv3(-0.6f, 0.2f, 0.3f)),
+                        k::kv3_normalize(k::kv3(-0.3f, 0.1f, -0.7f))}) {
+    // The folded table, by midpoint quadrature over (cos theta, phi).
+    const TableBsdf::Mix fm = fold.mix(hits, wo, 0, 0, -1, colour_w);
+    const int nz = 400, np = 800;
+    double want[3] = {0, 0, 0};
+    for (int i = 0; i < nz; ++i)
+      for (int j = 0; j < np; ++j) {
+        const double z = -1 + 2 * (i + 0.5) / nz, ph = 2 * M_PI * (j + 0.5) / np, s = std::sqrt(1 - z * z);
+        const Vec3 w = k::kv3(float(s * std::cos(ph)), float(s * std::sin(ph)), float(z));
+        const Vec3 f = fold.eval(fm, w, kd, kd);
+        const double dw = (2.0 / nz) * (2 * M_PI / np) * g(w);
+        want[0] += f.x * dw;
+        want[1] += f.y * dw;
+        want[2] += f.z * dw;
+      }
+    // The walk, per channel: each walk's estimate, summed.
+    const int n = 200000;
+    double est[3] = {0, 0, 0}, est2[3] = {0, 0, 0};
+    for (int i = 0; i < n; ++i) {
+      TableBsdf::Mix m = walk.mix(hits, wo, (kd.x + kd.y + kd.z) / 3, (kd.x + kd.y + kd.z) / 3);
+      double beta[3] = {1, 1, 1}, got[3] = {0, 0, 0};
+      for (int bounce = 0; bounce < 64; ++bounce) {
+        Vec3 wi;
+        float pdf = 0;
+        const bool sampled = walk.sample(m, u(rng), u(rng), u(rng), wi, &pdf);
+        EXPECT_TRUE(sampled);
+        if (!sampled) break;
+        Vec3 total;
+        const Vec3 lit = walk.eval(m, wi, kd, kd, &total);
+        const float lt = lit.x + lit.y + lit.z, tt = total.x + total.y + total.z;
+        const float q = tt > 0 ? std::min(1.0f, lt / tt) : 0.0f;
+        if (u(rng) < q) {
+          const double w = g(wi) / (double(pdf) * q);
+          got[0] += beta[0] * lit.x * w;
+          got[1] += beta[1] * lit.y * w;
+          got[2] += beta[2] * lit.z * w;
+          break;
+        }
+        const double w = 1 / (double(pdf) * (1 - q));
+        beta[0] *= (total.x - lit.x) * w;
+        beta[1] *= (total.y - lit.y) * w;
+        beta[2] *= (total.z - lit.z) * w;
+        walk.remix(m, k::kv3_neg(wi));
+      }
+      for (int c = 0; c < 3; ++c) {
+        est[c] += got[c];
+        est2[c] += got[c] * got[c];
+      }
+    }
+    for (int c = 0; c < 3; ++c) {
+      const double mean = est[c] / n, sd = std::sqrt(std::max(0.0, est2[c] / n - mean * mean) / n);
+      std::printf("[table-bsdf] wo (%+.2f, %+.2f, %+.2f) channel %d: folded %.5f, walk %.5f +- %.5f (%+.4f)\n", wo.x,
+                  wo.y, wo.z, c, want[c], mean, sd, want[c] / mean - 1);
+      worst = std::max(worst, std::fabs(want[c] / mean - 1));
+      EXPECT_NEAR(want[c], mean, 4 * sd + 0.01 * mean) << "channel " << c;
+    }
+  }
+  return worst;
+}
+
 // The folded table must be the walk's expectation (Material::bounce_table,
 // as render/material_yarn.cpp runs it: a direction from the single-
 // scattering table's total, leaving with its lit share, else scattering
 // again on the same classes seen from -wi). On stockinette, one class, the
 // fold's mean yarn met inside the footprint is that class, so the two are
 // the same model: what differs is the fold's node quadrature against the
-// walk's bilinear lookups and sampled directions. Checked over a smooth
-// weighting of the leaving directions, g(wi) = 1 + 0.8 wi.d, for views in
-// front and behind: the walk by Monte Carlo, the folded table by
-// quadrature.
+// walk's bilinear lookups and sampled directions (fold_against_walk).
 TEST(TableBsdf, FoldedTableIsTheWalkInExpectation) {
   // The fold's quadrature weights: each node's row of overlaps sums to the
   // integral of its hat function, in closed form (linear in theta over
@@ -236,70 +307,46 @@ TEST(TableBsdf, FoldedTableIsTheWalkInExpectation) {
   ASSERT_NE(fold, nullptr);
   ASSERT_FALSE(walk->folded());
   ASSERT_TRUE(fold->folded());
-  const Vec3 kd = k::kv3(0.72f, 0.18f, 0.14f);
-  const Vec3 d = k::kv3_normalize(k::kv3(0.3f, -0.4f, 0.87f));
-  const auto g = [&](Vec3 w) { return 1.0 + 0.8 * double(k::kv3_dot(w, d)); };
-  const float hits[FootprintTable::kClasses] = {1};
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<float> u(0, 1);
-  double worst = 0;
-  for (const Vec3 wo : {k::kv3_normalize(k::kv3(0.2f, -0.5f, 0.84f)), k::kv3_normalize(k::kv3(-0.6f, 0.2f, 0.3f)),
-                        k::kv3_normalize(k::kv3(-0.3f, 0.1f, -0.7f))}) {
-    // The folded table, by midpoint quadrature over (cos theta, phi).
-    const TableBsdf::Mix fm = fold->mix(hits, wo, 0, 0);
-    const int nz = 400, np = 800;
-    double want[3] = {0, 0, 0};
-    for (int i = 0; i < nz; ++i)
-      for (int j = 0; j < np; ++j) {
-        const double z = -1 + 2 * (i + 0.5) / nz, ph = 2 * M_PI * (j + 0.5) / np, s = std::sqrt(1 - z * z);
-        const Vec3 w = k::kv3(float(s * std::cos(ph)), float(s * std::sin(ph)), float(z));
-        const Vec3 f = fold->eval(fm, w, kd, kd);
-        const double dw = (2.0 / nz) * (2 * M_PI / np) * g(w);
-        want[0] += f.x * dw;
-        want[1] += f.y * dw;
-        want[2] += f.z * dw;
-      }
-    // The walk, per channel: each walk's estimate, summed.
-    const int n = 200000;
-    double est[3] = {0, 0, 0}, est2[3] = {0, 0, 0};
-    for (int i = 0; i < n; ++i) {
-      TableBsdf::Mix m = walk->mix(hits, wo, (kd.x + kd.y + kd.z) / 3, (kd.x + kd.y + kd.z) / 3);
-      double beta[3] = {1, 1, 1}, got[3] = {0, 0, 0};
-      for (int bounce = 0; bounce < 64; ++bounce) {
-        Vec3 wi;
-        float pdf = 0;
-        ASSERT_TRUE(walk->sample(m, u(rng), u(rng), u(rng), wi, &pdf));
-        Vec3 total;
-        const Vec3 lit = walk->eval(m, wi, kd, kd, &total);
-        const float lt = lit.x + lit.y + lit.z, tt = total.x + total.y + total.z;
-        const float q = tt > 0 ? std::min(1.0f, lt / tt) : 0.0f;
-        if (u(rng) < q) {
-          const double w = g(wi) / (double(pdf) * q);
-          got[0] += beta[0] * lit.x * w;
-          got[1] += beta[1] * lit.y * w;
-          got[2] += beta[2] * lit.z * w;
-          break;
-        }
-        const double w = 1 / (double(pdf) * (1 - q));
-        beta[0] *= (total.x - lit.x) * w;
-        beta[1] *= (total.y - lit.y) * w;
-        beta[2] *= (total.z - lit.z) * w;
-        walk->remix(m, k::kv3_neg(wi));
-      }
-      for (int c = 0; c < 3; ++c) {
-        est[c] += got[c];
-        est2[c] += got[c] * got[c];
-      }
-    }
-    for (int c = 0; c < 3; ++c) {
-      const double mean = est[c] / n, sd = std::sqrt(std::max(0.0, est2[c] / n - mean * mean) / n);
-      std::printf("[table-bsdf] wo (%+.2f, %+.2f, %+.2f) channel %d: folded %.5f, walk %.5f +- %.5f (%+.4f)\n", wo.x,
-                  wo.y, wo.z, c, want[c], mean, sd, want[c] / mean - 1);
-      worst = std::max(worst, std::fabs(want[c] / mean - 1));
-      EXPECT_NEAR(want[c], mean, 4 * sd + 0.01 * mean) << "channel " << c;
-    }
-  }
+  ASSERT_EQ(fold->colours(), 1);
+  const double worst = fold_against_walk(*walk, *fold, k::kv3(0.72f, 0.18f, 0.14f), nullptr);
   std::printf("[table-bsdf] folded against the walk: worst relative difference %.4f\n", worst);
+}
+
+// A pattern of two colour indices (stockinette, one class): the folded
+// table keeps each colour's walk, picked by the footprint's colour shares.
+TEST(TableBsdf, FoldedTableHoldsEachColoursWalk) {
+  const Rgb c0{0.72f, 0.18f, 0.14f}, c1{0.2f, 0.5f, 0.85f};
+  const auto make = [&](bool fold) {
+    KnitMaterialParams mp;
+    mp.mode = KnitMode::MultiScale;
+    mp.table_fold = fold;
+    mp.bsdf.reflect_colors = {c0, c1};
+    mp.bsdf.transmit_colors = mp.bsdf.reflect_colors;
+    mp.bsdf.body_energy = 0.85f;
+    mp.bsdf.body_reflect = 0.7f;
+    return KnitMaterial(Pattern::parse("KK\nKK\ncolors:\n01\n10\n"), mp);
+  };
+  const KnitMaterial walk_mat = make(false), fold_mat = make(true);
+  const TableBsdf *walk = walk_mat.table_bsdf(), *fold = fold_mat.table_bsdf();
+  ASSERT_NE(walk, nullptr);
+  ASSERT_NE(fold, nullptr);
+  ASSERT_TRUE(fold->folded());
+  ASSERT_EQ(fold->colours(), 2);
+  EXPECT_EQ(fold->bytes() - sizeof(TableBsdf), 2 * (walk->bytes() - sizeof(TableBsdf)));
+  const float first[2] = {1, 0}, second[2] = {0, 1};
+  double worst = 0;
+  worst = std::max(worst, fold_against_walk(*walk, *fold, k::kv3(c0.r, c0.g, c0.b), first));
+  worst = std::max(worst, fold_against_walk(*walk, *fold, k::kv3(c1.r, c1.g, c1.b), second));
+  std::printf("[table-bsdf] two colours, folded against each colour's walk: worst relative difference %.4f\n", worst);
+  // A footprint of both colours mixes the two colours' entries.
+  const float hits[FootprintTable::kClasses] = {1}, both[2] = {0.25f, 0.75f};
+  const Vec3 wo = k::kv3_normalize(k::kv3(0.2f, -0.5f, 0.84f)), wi = k::kv3_normalize(k::kv3(-0.3f, 0.4f, 0.8f));
+  const Vec3 f0 = fold->eval(fold->mix(hits, wo, 0, 0, -1, first), wi, {}, {});
+  const Vec3 f1 = fold->eval(fold->mix(hits, wo, 0, 0, -1, second), wi, {}, {});
+  const Vec3 fm = fold->eval(fold->mix(hits, wo, 0, 0, -1, both), wi, {}, {});
+  EXPECT_NEAR(fm.x, 0.25f * f0.x + 0.75f * f1.x, 1e-6f);
+  EXPECT_NEAR(fm.z, 0.25f * f0.z + 0.75f * f1.z, 1e-6f);
+  EXPECT_GT(f1.z, f0.z);  // the blue yarn is bluer
 }
 
 TEST(TableBsdf, BuiltOnlyWithTheClassTableAndTableBsdf) {

@@ -46,10 +46,11 @@ struct KnitMaterialParams {
   // false: the yarn BSDF at the footprint's mean normal, its lobes widened
   // by the normals' spread (LEAN), without self-shadowing.
   bool table_bsdf = true;
-  // With table_bsdf, for patterns of one colour index: the light that meets
-  // other yarn of a footprint first, and scatters there, is summed into the
-  // table when it is built (TableBsdf::folded), not followed by the
-  // renderer's walk (Material::bounce_table); false: the walk.
+  // With table_bsdf: the light that meets other yarn of a footprint first,
+  // and scatters there, is summed into the table when it is built
+  // (TableBsdf::folded: per class and colour of the palette, for up to
+  // TableBsdf::kMaxEntries of them), not followed by the renderer's walk
+  // (Material::bounce_table); false: the walk.
   bool table_fold = true;
   bool self_shadowing = true;   // near field: light and bounces from a yarn hit cross the rest of the shell
   // Multi-scale: a footprint below a stitch cell (in either direction) is
@@ -203,9 +204,12 @@ class KnitMaterial {
   // cells (below a cell in some direction) at pattern point (x, y).
   bool sub_cells_serve(float x, float y, Vec3 extent) const;
   // Shades sh with the tabulated BSDF: the mix of the classes' hits
-  // `slot_hits` seen from wi (colours already in sh), in the base's frame;
-  // false, sh's shading untouched, when no class has hits to weigh.
-  bool use_table_bsdf(const BaseHit& hit, Vec3 wi, const float* slot_hits, float u, KnitShade& sh) const;
+  // `slot_hits` seen from wi (colours already in sh; colour_w, the
+  // footprint's shares of the palette's colours for a folded table, null
+  // for the first colour alone), in the base's frame; false, sh's shading
+  // untouched, when no class has hits to weigh.
+  bool use_table_bsdf(const BaseHit& hit, Vec3 wi, const float* slot_hits, float u, KnitShade& sh,
+                      const float* colour_w = nullptr) const;
   void set_colors(KnitShade& sh, int color_index) const;
   // Palette mixed by a footprint's colour histogram (KNIT_MS_COLORS bins).
   void mix_colors(KnitShade& sh, const float* weights) const;

@@ -27,9 +27,10 @@
 // p_delta). The shadowed rest is light that meets other yarn of the
 // footprint first: the renderer's walk scatters it there again
 // (Material::bounce_table), taking that yarn as the footprint's classes
-// seen from the other way; for patterns of one colour index that walk is
-// summed into the table as it is built (folded()), and the values are then
-// the material's colours. What it leaves out: the base's curvature, and
+// seen from the other way; that walk is summed into the table as it is
+// built (folded(), per class and colour of the palette), and the values
+// are then the material's colours. What it leaves out: the base's
+// curvature, and
 // the sub-cells' own shading (a footprint below a cell mixes its classes'
 // tables by the sub-cells' hit fractions).
 #pragma once
@@ -64,16 +65,23 @@ class TableBsdf {
   // the view nodes to mix, their weights, and the classes' shares of the
   // hits. `slot_hits` holds, per class slot of the table, the footprint's
   // hits on that class (any scale; FootprintTable::aggregate's
-  // slot_hits). With u_view in [0, 1), one of the four view nodes around
+  // slot_hits). colour_w: folded with several colours, the footprint's
+  // shares of the palette's colours (null: the first colour alone); unused
+  // otherwise. With u_view in [0, 1), one of the four view nodes around
   // wo stands for their bilinear blend: node q with probability its
   // weight, picked by u_view. That is the blend in expectation at a quarter
   // of the cost of every later evaluation and sample, for renderers, which
   // average many samples anyway; negative u_view: the blend itself.
+  // Entries per node pair at most: the classes present, or folded, the
+  // classes times the palette's colours.
+  static constexpr int kMaxEntries = 16;
   struct Mix {
     int n = 0;  // view nodes mixed; 0 when no class has hits
     std::array<int32_t, 4> view{};
     std::array<float, 4> w{};
-    std::array<float, FootprintTable::kClasses> share{};  // the classes' shares of the hits
+    // The entries' shares of the hits: per class, or folded, per class and
+    // colour (entry class * colours + colour).
+    std::array<float, kMaxEntries> share{};
     // Sampling: the body colours' channel means; the weights of the four
     // stored values in a node's sampling value (1, cr, ct, 0: A + cr Br +
     // ct Bt; folded, 0, 0, 0, 1: the channels' mean); and the mix's
@@ -83,7 +91,8 @@ class TableBsdf {
     std::array<float, 4> sw{};
     std::array<float, kTheta + 1> rows{};
   };
-  Mix mix(const float* slot_hits, Vec3 wo, float cr, float ct, float u_view = -1) const;
+  Mix mix(const float* slot_hits, Vec3 wo, float cr, float ct, float u_view = -1,
+          const float* colour_w = nullptr) const;
   // The same classes seen from another direction wo.
   void remix(Mix& m, Vec3 wo, float u_view = -1) const;
 
@@ -113,17 +122,23 @@ class TableBsdf {
   // Folded: the table holds, per class and pair of nodes, the light from
   // wi that reaches the footprint's yarn directly or after any number of
   // scatterings off other yarn of the footprint, towards wo, in the
-  // material's colour (RGB, and their mean for sampling): the walk through
-  // the shadowed part (Material::bounce_table), summed at build time. Built
-  // so for patterns of one colour index with KnitMaterialParams::table_fold
+  // material's colours (RGB, and their mean for sampling; one entry per
+  // class and colour of the palette): the walk through the shadowed part
+  // (Material::bounce_table), summed at build time. Built so with
+  // KnitMaterialParams::table_fold when the classes times the colours (one
+  // for patterns of one colour index) are at most kMaxEntries
   // (docs/multiscale.md, "The walk folded into the table").
   bool folded() const { return folded_; }
+  // Colours per class in the entries: folded, the palette's (1 for a
+  // pattern of one colour index); else 1.
+  int colours() const { return colours_; }
 
   size_t bytes() const { return sizeof(*this) + values_.size() * sizeof(uint16_t) + rows_.size() * sizeof(float); }
   double build_seconds() const { return seconds_; }
-  // The tabulated A, Br, Bt (without V) and the lit share of class slot
-  // `slot`, view node `view`, light node `light` (as stored; folded: red,
-  // green, blue and their mean), for tests; and a node's direction.
+  // The tabulated A, Br, Bt (without V) and the lit share of entry `slot`
+  // (a class slot; folded, class slot * colours() + colour), view node
+  // `view`, light node `light` (as stored; folded: red, green, blue and
+  // their mean), for tests; and a node's direction.
   std::array<float, 4> value(int slot, int view, int light) const;
   static Vec3 node_direction(int node);
   // The overlaps of the nodes' bilinear hat functions (eval's
@@ -142,11 +157,15 @@ class TableBsdf {
 
   // The walk folded into the values (folded()): per class slot, its share
   // of the cells and, per view node, its hit fraction.
-  void fold(const KnitMaterial& material, const std::vector<double>& cell_share, const std::vector<double>& hit_frac);
+  // The entries become classes times `colours` (the palette's first).
+  void fold(const KnitMaterial& material, int colours, const std::vector<double>& cell_share,
+            const std::vector<double>& hit_frac);
 
 
   static constexpr int kValues = 4;
-  int slots_ = 0;
+  int slots_ = 0;  // entries per node pair
+  int classes_ = 0;
+  int colours_ = 1;
   bool folded_ = false;
   // The classes' stored values at a pair of nodes, and the classes' row
   // sums at a view node and theta row.
