@@ -393,7 +393,14 @@ void TableBsdf::fold(const KnitMaterial& material, int colours, const std::vecto
         g[size_t(y) * N + size_t(l)] = lb;
       }
       shadowed_weights(sbar.data());
-      for (int x = 0; x < N; ++x) a[size_t(y) * N + size_t(x)] = (x == y ? 1.0 : 0.0) - shw[size_t(x)];
+      // A row of K sums to the shadowed albedo seen from y, below one for
+      // an energy-conserving yarn BSDF; the table's sampling noise could
+      // put it at one or above (the series would not converge), and such a
+      // row is scaled back to 0.999.
+      double albedo = 0;
+      for (int x = 0; x < N; ++x) albedo += shw[size_t(x)];
+      const double scale = albedo > 0.999 ? 0.999 / albedo : 1.0;
+      for (int x = 0; x < N; ++x) a[size_t(y) * N + size_t(x)] = (x == y ? 1.0 : 0.0) - scale * shw[size_t(x)];
     }
     solve_in_place(a, g, N);
     for (size_t s = 0; s < S; ++s)
@@ -406,6 +413,9 @@ void TableBsdf::fold(const KnitMaterial& material, int colours, const std::vecto
         }
       }
   });
+  // (Not folded, the walk kept, should anything have come out other than
+  // finite: no NaN reaches an image.)
+  if (!std::all_of(out.begin(), out.end(), [](float v) { return std::isfinite(v); })) return;
   // Entry s * K + k: class slot s in colour k.
   const size_t E = S * K;
   values_.assign(E * NN * kValues, 0);

@@ -349,6 +349,51 @@ TEST(TableBsdf, FoldedTableHoldsEachColoursWalk) {
   EXPECT_GT(f1.z, f0.z);  // the blue yarn is bluer
 }
 
+// A white yarn whose body keeps all its energy (the yarn BSDF still loses
+// some, to the plies' shadows among others): the folded table must be
+// finite and non-negative, and its albedo between the single-scattering
+// lit part's and the lit and shadowed parts' together (the shadowed part
+// scatters again at an albedo below one).
+TEST(TableBsdf, FoldedTableOfAWhiteYarnConservesEnergy) {
+  const auto make = [](bool fold) {
+    KnitMaterialParams mp;
+    mp.mode = KnitMode::MultiScale;
+    mp.table_fold = fold;
+    mp.bsdf.reflect_colors = {Rgb{1, 1, 1}};
+    mp.bsdf.transmit_colors = mp.bsdf.reflect_colors;
+    mp.bsdf.body_energy = 1.0f;
+    mp.bsdf.body_reflect = 0.5f;
+    return KnitMaterial(Pattern::parse("KP\nPK\n"), mp);
+  };
+  const KnitMaterial fold_mat = make(true), walk_mat = make(false);
+  const TableBsdf *fold = fold_mat.table_bsdf(), *walk = walk_mat.table_bsdf();
+  ASSERT_TRUE(fold->folded());
+  const float hits[FootprintTable::kClasses] = {0.5f, 0.5f};
+  const Vec3 one = k::kv3(1, 1, 1);
+  for (const Vec3 wo : {k::kv3_normalize(k::kv3(0.1f, 0.2f, 0.97f)), k::kv3_normalize(k::kv3(-0.8f, 0.3f, 0.2f)),
+                        k::kv3_normalize(k::kv3(0.3f, -0.2f, -0.9f))}) {
+    const TableBsdf::Mix fm = fold->mix(hits, wo, 1, 1), wm = walk->mix(hits, wo, 1, 1);
+    const int nz = 400, np = 800;
+    double folded = 0, lit = 0, total = 0;
+    for (int i = 0; i < nz; ++i)
+      for (int j = 0; j < np; ++j) {
+        const double z = -1 + 2 * (i + 0.5) / nz, ph = 2 * M_PI * (j + 0.5) / np, sz = std::sqrt(1 - z * z);
+        const Vec3 w = k::kv3(float(sz * std::cos(ph)), float(sz * std::sin(ph)), float(z));
+        const double dw = (2.0 / nz) * (2 * M_PI / np);
+        const Vec3 f = fold->eval(fm, w, one, one);
+        ASSERT_TRUE(std::isfinite(f.x) && f.x >= 0);
+        folded += f.x * dw;
+        Vec3 all;
+        lit += walk->eval(wm, w, one, one, &all).x * dw;
+        total += all.x * dw;
+      }
+    std::printf("[table-bsdf] white yarn, wo.z %+.2f: albedo lit %.4f, lit and shadowed %.4f, folded %.4f\n", wo.z,
+                lit, total, folded);
+    EXPECT_GT(folded, lit);
+    EXPECT_LT(folded, total);
+  }
+}
+
 TEST(TableBsdf, BuiltOnlyWithTheClassTableAndTableBsdf) {
   KnitMaterialParams mp;
   mp.mode = KnitMode::MultiScale;
