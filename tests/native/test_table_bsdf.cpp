@@ -10,6 +10,8 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <utility>
+#include <vector>
 
 #include "knit/shading.h"
 
@@ -17,16 +19,19 @@ namespace {
 
 using namespace knit;
 
-// Seed stitch, or the pattern given; fold: the walk summed into the table
-// (TableBsdf::folded), else the table of single scattering.
-KnitMaterial seed_material(bool fold = true, const char* pattern = "KP\nPK\n") {
+// Seed stitch in a red yarn, or the pattern, palette and body given; fold:
+// the walk summed into the table (TableBsdf::folded), else the table of
+// single scattering.
+KnitMaterial seed_material(bool fold = true, const char* pattern = "KP\nPK\n",
+                           std::vector<Rgb> colours = {Rgb{0.72f, 0.18f, 0.14f}}, float body_energy = 0.85f,
+                           float body_reflect = 0.7f) {
   KnitMaterialParams mp;
   mp.mode = KnitMode::MultiScale;
   mp.table_fold = fold;
-  mp.bsdf.reflect_colors = {Rgb{0.72f, 0.18f, 0.14f}};
+  mp.bsdf.reflect_colors = std::move(colours);
   mp.bsdf.transmit_colors = mp.bsdf.reflect_colors;
-  mp.bsdf.body_energy = 0.85f;
-  mp.bsdf.body_reflect = 0.7f;
+  mp.bsdf.body_energy = body_energy;
+  mp.bsdf.body_reflect = body_reflect;
   return KnitMaterial(Pattern::parse(pattern), mp);
 }
 
@@ -316,17 +321,8 @@ TEST(TableBsdf, FoldedTableIsTheWalkInExpectation) {
 // table keeps each colour's walk, picked by the footprint's colour shares.
 TEST(TableBsdf, FoldedTableHoldsEachColoursWalk) {
   const Rgb c0{0.72f, 0.18f, 0.14f}, c1{0.2f, 0.5f, 0.85f};
-  const auto make = [&](bool fold) {
-    KnitMaterialParams mp;
-    mp.mode = KnitMode::MultiScale;
-    mp.table_fold = fold;
-    mp.bsdf.reflect_colors = {c0, c1};
-    mp.bsdf.transmit_colors = mp.bsdf.reflect_colors;
-    mp.bsdf.body_energy = 0.85f;
-    mp.bsdf.body_reflect = 0.7f;
-    return KnitMaterial(Pattern::parse("KK\nKK\ncolors:\n01\n10\n"), mp);
-  };
-  const KnitMaterial walk_mat = make(false), fold_mat = make(true);
+  const char* pattern = "KK\nKK\ncolors:\n01\n10\n";
+  const KnitMaterial walk_mat = seed_material(false, pattern, {c0, c1}), fold_mat = seed_material(true, pattern, {c0, c1});
   const TableBsdf *walk = walk_mat.table_bsdf(), *fold = fold_mat.table_bsdf();
   ASSERT_NE(walk, nullptr);
   ASSERT_NE(fold, nullptr);
@@ -355,17 +351,8 @@ TEST(TableBsdf, FoldedTableHoldsEachColoursWalk) {
 // lit part's and the lit and shadowed parts' together (the shadowed part
 // scatters again at an albedo below one).
 TEST(TableBsdf, FoldedTableOfAWhiteYarnConservesEnergy) {
-  const auto make = [](bool fold) {
-    KnitMaterialParams mp;
-    mp.mode = KnitMode::MultiScale;
-    mp.table_fold = fold;
-    mp.bsdf.reflect_colors = {Rgb{1, 1, 1}};
-    mp.bsdf.transmit_colors = mp.bsdf.reflect_colors;
-    mp.bsdf.body_energy = 1.0f;
-    mp.bsdf.body_reflect = 0.5f;
-    return KnitMaterial(Pattern::parse("KP\nPK\n"), mp);
-  };
-  const KnitMaterial fold_mat = make(true), walk_mat = make(false);
+  const KnitMaterial fold_mat = seed_material(true, "KP\nPK\n", {Rgb{1, 1, 1}}, 1.0f, 0.5f),
+                     walk_mat = seed_material(false, "KP\nPK\n", {Rgb{1, 1, 1}}, 1.0f, 0.5f);
   const TableBsdf *fold = fold_mat.table_bsdf(), *walk = walk_mat.table_bsdf();
   ASSERT_TRUE(fold->folded());
   const float hits[FootprintTable::kClasses] = {0.5f, 0.5f};
