@@ -318,18 +318,18 @@ void TableBsdf::fold(const KnitMaterial& material, int colours, const std::vecto
   // seen from view v, light from l arrives lit (tot q) or meets other yarn
   // of the footprint first (tot (1 - q)), yarn seen from -l, which scatters
   // what reaches it in turn. On the nodes, with quadrature weights omega
-  // (below) and the reversed direction a node of the grid again
-  // (theta -> pi - theta, phi -> phi + pi):
+  // (below) and rev the reversed node (theta -> pi - theta, phi -> phi +
+  // pi: the grid maps onto itself):
   //
-  //   F_s[v][l] = Lit_s[v][l] + sum_y Sh_s[v][rev y] omega(rev y) G[y][l],
+  //   F_s[v][l] = Lit_s[v][l] + sum_y (sum_l' Sh_s[v][l'] omega[l'][rev y]) G[y][l],
   //   G[y][l]   = sum_s pi_s(y) F_s[y][l],
   //
-  // where G is the yarn met inside the footprint: any class, in proportion
-  // to its share of the hits seen from y (its share of the cells times its
-  // hit fraction from y), as a footprint of whole pattern repeats mixes
-  // them. G solves (I - K) G = Lbar with K[y][x] = Sbar[y][rev x]
-  // omega(rev x), Sbar and Lbar the pi-weighted Sh and Lit; then each F_s
-  // is one product. Not linear in the yarn colours, so per channel and per
+  // where G is the yarn met inside the footprint, seen from view node y:
+  // any class, in proportion to its share of the hits seen from y (its
+  // share of the cells times its hit fraction from y), as a footprint of
+  // whole pattern repeats mixes them. G solves (I - K) G = Lbar with
+  // K[y][x] = sum_l' Sbar[y][l'] omega[l'][rev x], Sbar and Lbar the
+  // pi-weighted Sh and Lit; then each F_s is one product. Not linear in the yarn colours, so per channel and per
   // colour of the palette: yarn met inside a footprint takes its colour
   // (a footprint of several colours mixes their entries).
   //
