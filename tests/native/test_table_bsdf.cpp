@@ -345,8 +345,10 @@ TEST(TableBsdf, FoldedTableHoldsEachColoursWalk) {
   EXPECT_GT(f1.z, f0.z);  // the blue yarn is bluer
 }
 
-// A white yarn whose body keeps all its energy (the yarn BSDF still loses
-// some, to the plies' shadows among others): the folded table must be
+// A white yarn whose body takes all the energy (the yarn BSDF still
+// absorbs: its body reflection's self-shadowing, the optical depth on what
+// it transmits, the plies' shadow; albedos of 0.16-0.28 here): the folded
+// table must be
 // finite and non-negative, and its albedo between the single-scattering
 // lit part's and the lit and shadowed parts' together (the shadowed part
 // scatters again at an albedo below one).
