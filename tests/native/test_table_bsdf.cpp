@@ -348,10 +348,9 @@ TEST(TableBsdf, FoldedTableHoldsEachColoursWalk) {
 // A white yarn whose body takes all the energy (the yarn BSDF still
 // absorbs: its body reflection's self-shadowing, the optical depth on what
 // it transmits, the plies' shadow; albedos of 0.16-0.28 here): the folded
-// table must be
-// finite and non-negative, and its albedo between the single-scattering
-// lit part's and the lit and shadowed parts' together (the shadowed part
-// scatters again at an albedo below one).
+// table must be finite and non-negative, and its albedo between the
+// single-scattering lit part's and the lit and shadowed parts' together
+// (the shadowed part scatters again at an albedo below one).
 TEST(TableBsdf, FoldedTableOfAWhiteYarnConservesEnergy) {
   const KnitMaterial fold_mat = seed_material(true, "KP\nPK\n", {Rgb{1, 1, 1}}, 1.0f, 0.5f),
                      walk_mat = seed_material(false, "KP\nPK\n", {Rgb{1, 1, 1}}, 1.0f, 0.5f);
