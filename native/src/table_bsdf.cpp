@@ -329,9 +329,10 @@ void TableBsdf::fold(const KnitMaterial& material, int colours, const std::vecto
   // share of the cells times its hit fraction from y), as a footprint of
   // whole pattern repeats mixes them. G solves (I - K) G = Lbar with
   // K[y][x] = sum_l' Sbar[y][l'] omega[l'][rev x], Sbar and Lbar the
-  // pi-weighted Sh and Lit; then each F_s is one product. Not linear in the yarn colours, so per channel and per
-  // colour of the palette: yarn met inside a footprint takes its colour
-  // (a footprint of several colours mixes their entries).
+  // pi-weighted Sh and Lit; then each F_s is one product. Not linear in
+  // the yarn colours, so per channel and per colour of the palette: yarn
+  // met inside a footprint takes its colour (a footprint of several
+  // colours mixes their entries).
   //
   // The quadrature is the walk's own: eval interpolates bilinearly in theta
   // and phi, both at the shadowed light direction w and at the view -w of
@@ -441,28 +442,23 @@ std::array<float, 4> TableBsdf::value(int slot, int view, int l) const {
 TableBsdf::Mix TableBsdf::mix(const float* slot_hits, Vec3 wo, float cr, float ct, float u_view,
                               const float* colour_w) const {
   Mix m;
-  m.cr = cr;
-  m.ct = ct;
   m.sw = folded_ ? std::array<float, 4>{0, 0, 0, 1} : std::array<float, 4>{1, cr, ct, 0};
   float total = 0;
   for (int s = 0; s < classes_; ++s) total += std::max(0.0f, slot_hits[s]);
   if (!(total > 0)) return m;
-  if (colours_ == 1) {
-    for (int s = 0; s < classes_; ++s) m.share[size_t(s)] = std::max(0.0f, slot_hits[s]) / total;
-  } else {
-    // Per class and colour: the class's share times the colour's.
-    float cw[kMaxEntries] = {1}, csum = 0;
-    if (colour_w)
-      for (int k = 0; k < colours_; ++k) cw[k] = std::max(0.0f, colour_w[k]);
-    for (int k = 0; k < colours_; ++k) csum += cw[k];
-    if (!(csum > 0)) {
-      cw[0] = 1;
-      csum = 1;
-    }
-    for (int s = 0; s < classes_; ++s)
-      for (int k = 0; k < colours_; ++k)
-        m.share[size_t(s * colours_ + k)] = std::max(0.0f, slot_hits[s]) / total * (cw[k] / csum);
+  // Per entry: the class's share times the colour's (one colour: a factor
+  // of exactly one).
+  float cw[kMaxEntries] = {1}, csum = 0;
+  if (colour_w)
+    for (int k = 0; k < colours_; ++k) cw[k] = std::max(0.0f, colour_w[k]);
+  for (int k = 0; k < colours_; ++k) csum += cw[k];
+  if (!(csum > 0)) {
+    cw[0] = 1;
+    csum = 1;
   }
+  for (int s = 0; s < classes_; ++s)
+    for (int k = 0; k < colours_; ++k)
+      m.share[size_t(s * colours_ + k)] = std::max(0.0f, slot_hits[s]) / total * (cw[k] / csum);
   remix(m, wo, u_view);
   return m;
 }

@@ -82,12 +82,11 @@ class TableBsdf {
     // The entries' shares of the hits: per class, or folded, per class and
     // colour (entry class * colours + colour).
     std::array<float, kMaxEntries> share{};
-    // Sampling: the body colours' channel means; the weights of the four
-    // stored values in a node's sampling value (1, cr, ct, 0: A + cr Br +
-    // ct Bt; folded, 0, 0, 0, 1: the channels' mean); and the mix's
+    // Sampling: the weights of the four stored values in a node's sampling
+    // value (1, cr, ct, 0 with mix's body colours' channel means: A + cr
+    // Br + ct Bt; folded, 0, 0, 0, 1: the channels' mean); and the mix's
     // sampling values summed over each theta row's cells times their solid
     // angle, and over the sphere (at kTheta).
-    float cr = 0, ct = 0;
     std::array<float, 4> sw{};
     std::array<float, kTheta + 1> rows{};
   };
@@ -152,15 +151,14 @@ class TableBsdf {
   // its bilinear corners `c`), and the solid angle of a row's cells.
   float density(const Mix& m, const SphereNodes& c) const;
   static float cell_solid_angle(int theta_row);
-  // The mix's sampling value at light node l (A + cr Br + ct Bt).
+  // The mix's sampling value at light node l (its values weighed by sw).
   float node_value(const Mix& m, int l) const;
 
-  // The walk folded into the values (folded()): per class slot, its share
-  // of the cells and, per view node, its hit fraction.
-  // The entries become classes times `colours` (the palette's first).
+  // The walk folded into the values (folded()), given per class slot its
+  // share of the cells and, per view node, its hit fraction; the entries
+  // become the classes times `colours`, the palette's first colours.
   void fold(const KnitMaterial& material, int colours, const std::vector<double>& cell_share,
             const std::vector<double>& hit_frac);
-
 
   static constexpr int kValues = 4;
   int slots_ = 0;  // entries per node pair
