@@ -101,22 +101,48 @@ int64_t UvTriangleGrid::nearest(Vec2 uv, float& b1, float& b2) const {
   if (tri_count_ == 0) return -1;
   const int64_t inside = locate(uv, b1, b2);
   if (inside >= 0) return inside;
+  if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return -1;
   int cx, cy;
   cell_of(uv, cx, cy);
-  const float cw = 1.0f / sx_, ch = 1.0f / sy_;
-  // Distance from uv to the clamped cell, so ring distances are conservative.
+  // Cell boundaries in double, and a slack that covers cell_of's float
+  // rounding: a triangle is listed in every cell its UV bounds overlap, so
+  // its point nearest to uv lies in one of its cells grown by the slack.
+  const double cw = double(hi_.x - lo_.x) / nx_, ch = double(hi_.y - lo_.y) / ny_;
+  const double slack = 1e-4 * std::max(cw, ch) +
+                       1e-6 * std::max({std::fabs(double(lo_.x)), std::fabs(double(hi_.x)), std::fabs(double(lo_.y)),
+                                        std::fabs(double(hi_.y))});
+  const double px = uv.x, py = uv.y;
+  // Distance from uv along one axis to cells [i0, i1] of that axis (the
+  // grid's outer cells reaching to infinity), less the slack.
+  auto axis_gap = [&](int i0, int i1, int n, double lo, double w, double p) {
+    const double a = i0 == 0 ? -HUGE_VAL : lo + i0 * w, b = i1 == n - 1 ? HUGE_VAL : lo + (i1 + 1) * w;
+    return std::max(0.0, std::max(a - p, p - b) - slack);
+  };
   double best = std::numeric_limits<double>::infinity();
   int64_t best_t = -1;
   const int max_ring = std::max(nx_, ny_);
   for (int ring = 0; ring <= max_ring; ++ring) {
-    // Any triangle in ring r is at least (r - 1) cells away from uv's clamped cell.
-    const double ring_dist = std::max(0, ring - 1) * double(std::min(cw, ch));
-    if (best_t >= 0 && ring_dist * ring_dist > best) break;
-    for (int y = cy - ring; y <= cy + ring; ++y) {
-      if (y < 0 || y >= ny_) continue;
-      for (int x = cx - ring; x <= cx + ring; ++x) {
-        if (x < 0 || x >= nx_) continue;
-        if (std::max(std::abs(x - cx), std::abs(y - cy)) != ring) continue;
+    if (ring > 0) {
+      // Every cell of this ring and the ones after it lies beyond one of the
+      // sides of the square of rings 0 .. ring - 1 that has cells beyond it:
+      // the nearest such side bounds their distance from uv.
+      const int r = ring - 1;
+      double bound = HUGE_VAL;
+      if (cx - r - 1 >= 0) bound = std::min(bound, std::max(0.0, px - (lo_.x + (cx - r) * cw) - slack));
+      if (cx + r + 1 <= nx_ - 1) bound = std::min(bound, std::max(0.0, (lo_.x + (cx + r + 1) * cw) - px - slack));
+      if (cy - r - 1 >= 0) bound = std::min(bound, std::max(0.0, py - (lo_.y + (cy - r) * ch) - slack));
+      if (cy + r + 1 <= ny_ - 1) bound = std::min(bound, std::max(0.0, (lo_.y + (cy + r + 1) * ch) - py - slack));
+      if (bound == HUGE_VAL) break;  // the square holds the whole grid
+      if (best_t >= 0 && bound * bound > best) break;
+    }
+    for (int y = std::max(cy - ring, 0); y <= std::min(cy + ring, ny_ - 1); ++y) {
+      const bool edge_row = std::abs(y - cy) == ring;
+      const double gy = axis_gap(y, y, ny_, lo_.y, ch, py);
+      for (int x = std::max(cx - ring, 0); x <= std::min(cx + ring, nx_ - 1);
+           x = edge_row || x == cx + ring ? x + 1 : cx + ring) {
+        if (!edge_row && std::abs(x - cx) != ring) continue;
+        const double gx = axis_gap(x, x, nx_, lo_.x, cw, px);
+        if (best_t >= 0 && gx * gx + gy * gy > best) continue;  // no point of the cell is nearer
         const size_t c = static_cast<size_t>(y) * nx_ + x;
         for (uint32_t i = cell_start_[c]; i < cell_start_[c + 1]; ++i) {
           const size_t t = cell_tris_[i];

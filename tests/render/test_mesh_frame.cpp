@@ -4,12 +4,15 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <set>
 #include <string>
 
 #include "render/frame_bake.h"
 #include "render/mesh_frame.h"
+#include "render/uv_grid.h"
 #include "render_test_util.h"
 
 namespace knit::render {
@@ -146,6 +149,70 @@ TEST(MeshFrame, HintedLookupsMatchUnhintedOnes) {
       EXPECT_GE(h, 0);
       EXPECT_LT(h, int64_t(mesh->num_triangles()));  // now the triangle found
     }
+}
+
+// UvTriangleGrid::nearest against a brute-force search in double over every
+// triangle, on meshes of one chart (half cylinder), several charts
+// (cushion, scarf) and a sphere, for points inside, just outside and far
+// outside the charts: the point it returns (its barycentrics) is as near to
+// the query as the nearest point of any triangle.
+double uv_distance_to_triangle(const TriangleMesh& m, size_t t, Vec2 p) {
+  const Vec2 a = m.uvs[m.indices[3 * t]], b = m.uvs[m.indices[3 * t + 1]], c = m.uvs[m.indices[3 * t + 2]];
+  const double ax = a.x, ay = a.y, bx = b.x, by = b.y, cx = c.x, cy = c.y, qx = p.x, qy = p.y;
+  const double area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax);
+  const double w1 = ((qx - ax) * (cy - ay) - (qy - ay) * (cx - ax)) / area;
+  const double w2 = ((bx - ax) * (qy - ay) - (by - ay) * (qx - ax)) / area;
+  if (w1 >= 0 && w2 >= 0 && w1 + w2 <= 1) return 0;
+  double best = HUGE_VAL;
+  const double vx[3] = {ax, bx, cx}, vy[3] = {ay, by, cy};
+  for (int e = 0; e < 3; ++e) {
+    const double ex = vx[(e + 1) % 3] - vx[e], ey = vy[(e + 1) % 3] - vy[e];
+    const double l2 = ex * ex + ey * ey;
+    const double s = l2 > 0 ? std::clamp(((qx - vx[e]) * ex + (qy - vy[e]) * ey) / l2, 0.0, 1.0) : 0.0;
+    best = std::min(best, std::hypot(vx[e] + s * ex - qx, vy[e] + s * ey - qy));
+  }
+  return best;
+}
+
+TEST(UvTriangleGrid, NearestIsTheNearestTriangle) {
+  for (const char* name : {"half_cylinder.obj", "cushion.obj", "scarf.obj", "sphere.obj"}) {
+    const TriangleMesh m = load_mesh(test::mesh(name));
+    const UvTriangleGrid grid(m);
+    const Vec2 lo = grid.uv_min(), hi = grid.uv_max();
+    const float w = hi.x - lo.x, h = hi.y - lo.y;
+    uint32_t state = 12345;
+    auto uni = [&]() {
+      state = state * 1664525u + 1013904223u;
+      return float(state >> 8) / float(1 << 24);
+    };
+    double worst = 0;
+    int outside = 0;
+    for (int i = 0; i < 600; ++i) {
+      // the bounding box grown by 2%, by 50% and by 1000 times its size
+      const float grow = i < 300 ? 0.02f : (i < 500 ? 0.5f : 1000.0f);
+      const Vec2 p{lo.x - grow * w + (1 + 2 * grow) * w * uni(), lo.y - grow * h + (1 + 2 * grow) * h * uni()};
+      double truth = HUGE_VAL;
+      for (size_t t = 0; t < m.num_triangles(); ++t) {
+        const Vec2 a = m.uvs[m.indices[3 * t]], b = m.uvs[m.indices[3 * t + 1]], c = m.uvs[m.indices[3 * t + 2]];
+        if ((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x) == 0) continue;  // (no UV area: not in the grid)
+        truth = std::min(truth, uv_distance_to_triangle(m, t, p));
+      }
+      float b1 = -1, b2 = -1;
+      const int64_t t = grid.nearest(p, b1, b2);
+      ASSERT_GE(t, 0) << name << " at (" << p.x << ", " << p.y << ")";
+      const Vec2 a = m.uvs[m.indices[3 * t]], b = m.uvs[m.indices[3 * t + 1]], c = m.uvs[m.indices[3 * t + 2]];
+      const double qx = double(a.x) * (1 - b1 - b2) + double(b.x) * b1 + double(c.x) * b2;
+      const double qy = double(a.y) * (1 - b1 - b2) + double(b.y) * b1 + double(c.y) * b2;
+      const double got = truth == 0 ? uv_distance_to_triangle(m, size_t(t), p) : std::hypot(qx - p.x, qy - p.y);
+      const double err = std::fabs(got - truth) / std::max(1.0, double(std::max(w, h)) * (1 + 2 * grow));
+      worst = std::max(worst, err);
+      ASSERT_LT(err, 1e-5) << name << " at (" << p.x << ", " << p.y << "): " << got << " against " << truth;
+      outside += truth > 0;
+    }
+    EXPECT_GT(outside, 250) << name;  // nearly half the points lie outside the charts
+    std::printf("%s: worst relative distance error %.2g over 600 points, %d outside the charts\n", name, worst,
+                outside);
+  }
 }
 
 TEST(MeshFrame, MirroredUvsGiveABitangentAlongPlusV) {
