@@ -6,6 +6,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "render/grid_ring.h"
+
 namespace knit::render {
 
 namespace OIIO = OIIO_NAMESPACE;
@@ -200,18 +202,15 @@ bool MeshFrame::lookup(Vec2 uv, Frame& f, int64_t* hint) const {
     const int cy = std::clamp(static_cast<int>(std::lround(fy)), 0, bk.height - 1);
     const int rmax = std::max(bk.width, bk.height);
     for (int r = 1; r <= rmax && !(wsum > 0); ++r)
-      for (int y = cy - r; y <= cy + r && !(wsum > 0); ++y)
-        for (int x = cx - r; x <= cx + r; ++x) {
-          if (x < 0 || y < 0 || x >= bk.width || y >= bk.height) continue;
-          if (std::max(std::abs(x - cx), std::abs(y - cy)) != r) continue;
-          const float* p = bk.texel(x, y);
-          if (!(p[7] > 0)) continue;
-          n = {p[0], p[1], p[2]};
-          t = {p[3], p[4], p[5]};
-          sign = p[6];
-          wsum = 1;
-          break;
-        }
+      for_each_ring_cell(cx, cy, r, bk.width, bk.height, [&](int x, int y) {
+        const float* p = bk.texel(x, y);
+        if (!(p[7] > 0)) return false;
+        n = {p[0], p[1], p[2]};
+        t = {p[3], p[4], p[5]};
+        sign = p[6];
+        wsum = 1;
+        return true;
+      });
   }
   if (!(length(n) > 1e-20f)) n = {0, 0, 1};
   f = Frame::from_normal_tangent(normalize(n), t);

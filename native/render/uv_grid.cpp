@@ -1,5 +1,7 @@
 #include "render/uv_grid.h"
 
+#include "render/grid_ring.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -112,10 +114,10 @@ int64_t UvTriangleGrid::nearest(Vec2 uv, float& b1, float& b2) const {
                        1e-6 * std::max({std::fabs(double(lo_.x)), std::fabs(double(hi_.x)), std::fabs(double(lo_.y)),
                                         std::fabs(double(hi_.y))});
   const double px = uv.x, py = uv.y;
-  // Distance from uv along one axis to cells [i0, i1] of that axis (the
-  // grid's outer cells reaching to infinity), less the slack.
-  auto axis_gap = [&](int i0, int i1, int n, double lo, double w, double p) {
-    const double a = i0 == 0 ? -HUGE_VAL : lo + i0 * w, b = i1 == n - 1 ? HUGE_VAL : lo + (i1 + 1) * w;
+  // Distance from uv along one axis to cell i of that axis (the grid's
+  // outer cells reaching to infinity), less the slack.
+  auto axis_gap = [&](int i, int n, double lo, double w, double p) {
+    const double a = i == 0 ? -HUGE_VAL : lo + i * w, b = i == n - 1 ? HUGE_VAL : lo + (i + 1) * w;
     return std::max(0.0, std::max(a - p, p - b) - slack);
   };
   double best = std::numeric_limits<double>::infinity();
@@ -135,42 +137,40 @@ int64_t UvTriangleGrid::nearest(Vec2 uv, float& b1, float& b2) const {
       if (bound == HUGE_VAL) break;  // the square holds the whole grid
       if (best_t >= 0 && bound * bound > best) break;
     }
-    for (int y = std::max(cy - ring, 0); y <= std::min(cy + ring, ny_ - 1); ++y) {
-      const bool edge_row = std::abs(y - cy) == ring;
-      const double gy = axis_gap(y, y, ny_, lo_.y, ch, py);
-      for (int x = std::max(cx - ring, 0); x <= std::min(cx + ring, nx_ - 1);
-           x = edge_row || x == cx + ring ? x + 1 : cx + ring) {
-        if (!edge_row && std::abs(x - cx) != ring) continue;
-        const double gx = axis_gap(x, x, nx_, lo_.x, cw, px);
-        if (best_t >= 0 && gx * gx + gy * gy > best) continue;  // no point of the cell is nearer
-        const size_t c = static_cast<size_t>(y) * nx_ + x;
-        for (uint32_t i = cell_start_[c]; i < cell_start_[c + 1]; ++i) {
-          const size_t t = cell_tris_[i];
-          const Vec2 v[3] = {mesh_.uvs[mesh_.indices[3 * t]], mesh_.uvs[mesh_.indices[3 * t + 1]],
-                             mesh_.uvs[mesh_.indices[3 * t + 2]]};
-          float c1, c2;
-          if (barycentrics(t, uv, c1, c2)) {
-            b1 = c1;
-            b2 = c2;
-            return static_cast<int64_t>(t);
-          }
-          for (int e = 0; e < 3; ++e) {
-            double d2;
-            const float s = closest_on_segment(uv, v[e], v[(e + 1) % 3], d2);
-            if (d2 < best || (d2 == best && static_cast<int64_t>(t) < best_t)) {
-              best = d2;
-              best_t = static_cast<int64_t>(t);
-              // Barycentrics (of vertices 1 and 2) of the point on edge e.
-              float w[3] = {0, 0, 0};
-              w[e] = 1 - s;
-              w[(e + 1) % 3] = s;
-              b1 = w[1];
-              b2 = w[2];
-            }
+    int64_t found = -1;  // a triangle that contains uv
+    for_each_ring_cell(cx, cy, ring, nx_, ny_, [&](int x, int y) {
+      const double gx = axis_gap(x, nx_, lo_.x, cw, px), gy = axis_gap(y, ny_, lo_.y, ch, py);
+      if (best_t >= 0 && gx * gx + gy * gy > best) return false;  // no point of the cell is nearer
+      const size_t c = static_cast<size_t>(y) * nx_ + x;
+      for (uint32_t i = cell_start_[c]; i < cell_start_[c + 1]; ++i) {
+        const size_t t = cell_tris_[i];
+        const Vec2 v[3] = {mesh_.uvs[mesh_.indices[3 * t]], mesh_.uvs[mesh_.indices[3 * t + 1]],
+                           mesh_.uvs[mesh_.indices[3 * t + 2]]};
+        float c1, c2;
+        if (barycentrics(t, uv, c1, c2)) {
+          b1 = c1;
+          b2 = c2;
+          found = static_cast<int64_t>(t);
+          return true;
+        }
+        for (int e = 0; e < 3; ++e) {
+          double d2;
+          const float s = closest_on_segment(uv, v[e], v[(e + 1) % 3], d2);
+          if (d2 < best || (d2 == best && static_cast<int64_t>(t) < best_t)) {
+            best = d2;
+            best_t = static_cast<int64_t>(t);
+            // Barycentrics (of vertices 1 and 2) of the point on edge e.
+            float w[3] = {0, 0, 0};
+            w[e] = 1 - s;
+            w[(e + 1) % 3] = s;
+            b1 = w[1];
+            b2 = w[2];
           }
         }
       }
-    }
+      return false;
+    });
+    if (found >= 0) return found;
   }
   return best_t;
 }

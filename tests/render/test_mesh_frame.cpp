@@ -311,5 +311,78 @@ TEST(BakeFrames, UncoveredTexelsAreMarkedAndDilated) {
   EXPECT_THROW(bake_frames(load_mesh(obj), dir + "/tri.png", s), std::runtime_error);
 }
 
+// A baked lookup between two charts, where no texel around it is covered,
+// takes the first covered texel of the rings around it (rows from the top,
+// left to right): checked against a scan of the whole image for each point
+// of a row across the gap, which comes from the left chart on its left side
+// and from the right chart on its right.
+TEST(BakeFrames, LookupsBetweenChartsTakeTheNearestRingsTexel) {
+  const std::string dir = test::test_dir();
+  // Two triangles far apart in UV, facing about +z (left) and +x (right),
+  // their normals varying over them so that each texel's is its own.
+  const std::string obj = test::write_file(dir, "two.obj",
+                                           "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 0\nv 0 0 1\nv 0 1 0\n"
+                                           "vt 0 0\nvt 0.15 0\nvt 0 1\nvt 1 0\nvt 1 1\nvt 0.85 1\n"
+                                           "vn 0 0 1\nvn 0.6 0 0.8\nvn 0 0.6 0.8\nvn 1 0 0\nvn 0.8 0.6 0\nvn 0.8 0 0.6\n"
+                                           "f 1/1/1 2/2/2 3/3/3\nf 4/4/4 5/5/5 6/6/6\n");
+  BakeSettings s;
+  s.width = 96;
+  s.height = 24;
+  s.dilate = 0;
+  const BakeResult r = bake_frames(load_mesh(obj), dir + "/two.exr", s);
+  auto in = OIIO::ImageInput::open(dir + "/two.exr");
+  ASSERT_TRUE(in);
+  std::vector<float> px(size_t(s.width) * s.height * 8);
+  ASSERT_TRUE(in->read_image(0, 0, 0, 8, OIIO::TypeDesc::FLOAT, px.data()));
+  int alpha = -1, ch_n[3] = {-1, -1, -1};
+  for (int c = 0; c < 8; ++c) {
+    const std::string name = in->spec().channel_name(c);
+    if (name == "A") alpha = c;
+    for (int k = 0; k < 3; ++k)
+      if (name == std::string("N.") + "XYZ"[k]) ch_n[k] = c;
+  }
+  ASSERT_GE(alpha, 0);
+  ASSERT_TRUE(ch_n[0] >= 0 && ch_n[1] >= 0 && ch_n[2] >= 0);
+  in.reset();
+  const auto baked = MeshFrame::from_baked(dir + "/two.exr", 1.0f);
+  int left = 0, right = 0;
+  const int j = 6;  // a row in the upper part of the image, where the charts are apart
+  auto covered = [&](int x, int y) {
+    return x >= 0 && y >= 0 && x < s.width && y < s.height && px[(size_t(y) * s.width + x) * 8 + alpha] > 0;
+  };
+  for (int i = 0; i < s.width; ++i) {
+    // (texels whose bilinear neighbours are all uncovered: the ring search answers there)
+    bool near_chart = false;
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) near_chart = near_chart || covered(i + dx, j + dy);
+    if (near_chart) continue;
+    // the first covered texel in ring order from (i, j), by a scan of every texel
+    int best_r = 1 << 30, bx = -1, by = -1;
+    for (int y = 0; y < s.height; ++y)
+      for (int x = 0; x < s.width; ++x) {
+        if (!covered(x, y)) continue;
+        const int rr = std::max(std::abs(x - i), std::abs(y - j));
+        if (rr < best_r || (rr == best_r && (y < by || (y == by && x < bx)))) {
+          best_r = rr;
+          bx = x;
+          by = y;
+        }
+      }
+    ASSERT_GE(bx, 0);
+    // the texel centre (i, j) in UV (row 0 at the top, v = uv_max.y)
+    const Vec2 uv{r.uv_min.x + (i + 0.5f) / s.width * (r.uv_max.x - r.uv_min.x),
+                  r.uv_max.y - (j + 0.5f) / s.height * (r.uv_max.y - r.uv_min.y)};
+    Frame f;
+    baked->lookup(uv, f);
+    const float* texel = &px[(size_t(by) * s.width + bx) * 8];
+    const Vec3 want = normalize(Vec3(texel[ch_n[0]], texel[ch_n[1]], texel[ch_n[2]]));
+    EXPECT_LT(length(f.n - want), 1e-5f) << "texel " << i << ": the covered texel found is not (" << bx << ", "
+                                         << by << ")";
+    (want.x > 0.5f ? right : left) += 1;
+  }
+  EXPECT_GT(left, 10);
+  EXPECT_GT(right, 10);
+}
+
 }  // namespace
 }  // namespace knit::render
