@@ -1,11 +1,11 @@
 #include "render/uv_grid.h"
 
-#include "render/grid_ring.h"
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+
+#include "render/grid_ring.h"
 
 namespace knit::render {
 
@@ -114,10 +114,10 @@ int64_t UvTriangleGrid::nearest(Vec2 uv, float& b1, float& b2) const {
                        1e-6 * std::max({std::fabs(double(lo_.x)), std::fabs(double(hi_.x)), std::fabs(double(lo_.y)),
                                         std::fabs(double(hi_.y))});
   const double px = uv.x, py = uv.y;
-  // Distance from uv along one axis to cell i of that axis (the grid's
-  // outer cells reaching to infinity), less the slack.
-  auto axis_gap = [&](int i, int n, double lo, double w, double p) {
-    const double a = i == 0 ? -HUGE_VAL : lo + i * w, b = i == n - 1 ? HUGE_VAL : lo + (i + 1) * w;
+  // Distance from uv along one axis to cells i0 .. i1 of that axis (the
+  // grid's outer cells reaching to infinity), less the slack.
+  auto axis_gap = [&](int i0, int i1, int n, double lo, double w, double p) {
+    const double a = i0 == 0 ? -HUGE_VAL : lo + i0 * w, b = i1 == n - 1 ? HUGE_VAL : lo + (i1 + 1) * w;
     return std::max(0.0, std::max(a - p, p - b) - slack);
   };
   double best = std::numeric_limits<double>::infinity();
@@ -126,20 +126,21 @@ int64_t UvTriangleGrid::nearest(Vec2 uv, float& b1, float& b2) const {
   for (int ring = 0; ring <= max_ring; ++ring) {
     if (ring > 0) {
       // Every cell of this ring and the ones after it lies beyond one of the
-      // sides of the square of rings 0 .. ring - 1 that has cells beyond it:
-      // the nearest such side bounds their distance from uv.
+      // sides of the square of rings 0 .. ring - 1 that has cells beyond it,
+      // in the columns or rows past that side: the nearest of those bounds
+      // their distance from uv.
       const int r = ring - 1;
       double bound = HUGE_VAL;
-      if (cx - r - 1 >= 0) bound = std::min(bound, std::max(0.0, px - (lo_.x + (cx - r) * cw) - slack));
-      if (cx + r + 1 <= nx_ - 1) bound = std::min(bound, std::max(0.0, (lo_.x + (cx + r + 1) * cw) - px - slack));
-      if (cy - r - 1 >= 0) bound = std::min(bound, std::max(0.0, py - (lo_.y + (cy - r) * ch) - slack));
-      if (cy + r + 1 <= ny_ - 1) bound = std::min(bound, std::max(0.0, (lo_.y + (cy + r + 1) * ch) - py - slack));
+      if (cx - r - 1 >= 0) bound = std::min(bound, axis_gap(0, cx - r - 1, nx_, lo_.x, cw, px));
+      if (cx + r + 1 <= nx_ - 1) bound = std::min(bound, axis_gap(cx + r + 1, nx_ - 1, nx_, lo_.x, cw, px));
+      if (cy - r - 1 >= 0) bound = std::min(bound, axis_gap(0, cy - r - 1, ny_, lo_.y, ch, py));
+      if (cy + r + 1 <= ny_ - 1) bound = std::min(bound, axis_gap(cy + r + 1, ny_ - 1, ny_, lo_.y, ch, py));
       if (bound == HUGE_VAL) break;  // the square holds the whole grid
       if (best_t >= 0 && bound * bound > best) break;
     }
     int64_t found = -1;  // a triangle that contains uv
     for_each_ring_cell(cx, cy, ring, nx_, ny_, [&](int x, int y) {
-      const double gx = axis_gap(x, nx_, lo_.x, cw, px), gy = axis_gap(y, ny_, lo_.y, ch, py);
+      const double gx = axis_gap(x, x, nx_, lo_.x, cw, px), gy = axis_gap(y, y, ny_, lo_.y, ch, py);
       if (best_t >= 0 && gx * gx + gy * gy > best) return false;  // no point of the cell is nearer
       const size_t c = static_cast<size_t>(y) * nx_ + x;
       for (uint32_t i = cell_start_[c]; i < cell_start_[c + 1]; ++i) {
