@@ -92,10 +92,8 @@ int64_t MeshFrame::triangle_at(Vec2 uv, float& b1, float& b2, bool& inside, int6
     inside = true;
     return *hint;
   }
-  int64_t tri = grid_->locate(uv, b1, b2);
-  inside = tri >= 0;
+  const int64_t tri = grid_->nearest(uv, b1, b2, &inside);
   if (inside && hint) *hint = tri;
-  if (!inside) tri = grid_->nearest(uv, b1, b2);
   return tri;
 }
 

@@ -99,10 +99,14 @@ static float closest_on_segment(Vec2 p, Vec2 a, Vec2 b, double& d2) {
   return static_cast<float>(s);
 }
 
-int64_t UvTriangleGrid::nearest(Vec2 uv, float& b1, float& b2) const {
+int64_t UvTriangleGrid::nearest(Vec2 uv, float& b1, float& b2, bool* inside) const {
+  if (inside) *inside = false;
   if (tri_count_ == 0) return -1;
-  const int64_t inside = locate(uv, b1, b2);
-  if (inside >= 0) return inside;
+  const int64_t in = locate(uv, b1, b2);
+  if (in >= 0) {
+    if (inside) *inside = true;
+    return in;
+  }
   if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return -1;
   int cx, cy;
   cell_of(uv, cx, cy);

@@ -21,8 +21,9 @@ class UvTriangleGrid {
   // The triangle whose UV image is closest to `uv`, with the barycentrics of
   // that closest point (inside the triangle); -1 only if the grid is empty
   // or `uv` is not finite (distances are compared in double, so a point
-  // 1e30 away still finds its triangle).
-  int64_t nearest(Vec2 uv, float& b1, float& b2) const;
+  // 1e30 away still finds its triangle). `inside`, when given, says whether
+  // the triangle contains uv (the one locate() returns).
+  int64_t nearest(Vec2 uv, float& b1, float& b2, bool* inside = nullptr) const;
 
   Vec2 uv_min() const { return lo_; }
   Vec2 uv_max() const { return hi_; }

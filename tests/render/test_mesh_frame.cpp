@@ -198,8 +198,11 @@ TEST(UvTriangleGrid, NearestIsTheNearestTriangle) {
         truth = std::min(truth, uv_distance_to_triangle(m, t, p));
       }
       float b1 = -1, b2 = -1;
-      const int64_t t = grid.nearest(p, b1, b2);
+      bool inside = false;
+      const int64_t t = grid.nearest(p, b1, b2, &inside);
       ASSERT_GE(t, 0) << name << " at (" << p.x << ", " << p.y << ")";
+      // (inside: within locate()'s tolerance of a triangle)
+      EXPECT_EQ(inside, truth <= 1e-5 * std::max(w, h)) << name << " at (" << p.x << ", " << p.y << ")";
       const Vec2 a = m.uvs[m.indices[3 * t]], b = m.uvs[m.indices[3 * t + 1]], c = m.uvs[m.indices[3 * t + 2]];
       const double qx = double(a.x) * (1 - b1 - b2) + double(b.x) * b1 + double(c.x) * b2;
       const double qy = double(a.y) * (1 - b1 - b2) + double(b.y) * b1 + double(c.y) * b2;
