@@ -9,6 +9,7 @@
 
 #include "cli.h"
 #include "cli_args.h"
+#include "knit/table_cache.h"
 #include "render/render_job.h"
 
 namespace knit::cli {
@@ -37,12 +38,16 @@ const char* kUsage =
     "                           first yarn colour\n"
     "  --mask-object NAME       write a coverage mask instead of radiance: per pixel, the\n"
     "                           fraction of camera rays that first hit object NAME (for\n"
-    "                           `knitshade compare --mask`)\n";
+    "                           `knitshade compare --mask`)\n"
+    "  --cache-dir DIR          keep multi-scale class tables in DIR between runs (default:\n"
+    "                           $KNITSHADE_CACHE_DIR, else $XDG_CACHE_HOME/knitshade, else\n"
+    "                           ~/.cache/knitshade; KNITSHADE_CACHE_DIR=off: none)\n"
+    "  --no-cache               build the class tables and keep nothing\n";
 
 int run(const std::vector<std::string>& args) {
   using namespace knit::render;
   RenderJob job;
-  bool quiet = false;
+  bool quiet = false, no_cache = false;
   for (size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
     if (a == "-h" || a == "--help") {
@@ -72,6 +77,11 @@ int run(const std::vector<std::string>& args) {
       job.explicit_yarns = true;
     } else if (a == "--mask-object") {
       job.mask_object = option_value(args, i);
+    } else if (a == "--cache-dir") {
+      job.table_cache_dir = option_value(args, i);
+      if (job.table_cache_dir->empty()) throw UsageError{"--cache-dir: empty folder name (use --no-cache for none)"};
+    } else if (a == "--no-cache") {
+      no_cache = true;
     } else if (a == "--knit-preview-diffuse") {
       job.knit_preview_diffuse = true;
     } else if (!a.empty() && a[0] == '-') {
@@ -85,6 +95,11 @@ int run(const std::vector<std::string>& args) {
   if (job.scene_file.empty()) throw UsageError{"no scene file given"};
   if (job.output_file.empty()) throw UsageError{"no output image given (-o IMAGE.exr or -o IMAGE.png)"};
   job.progress = quiet ? ProgressMode::Quiet : ProgressMode::Auto;
+  if (no_cache && job.table_cache_dir) throw UsageError{"--cache-dir and --no-cache together"};
+  if (no_cache)
+    job.table_cache_dir = std::string();
+  else if (!job.table_cache_dir)
+    job.table_cache_dir = knit::default_table_cache_dir();
 
   const RenderJobResult r = run_render_job(job, [](const std::string& w) {
     std::fprintf(stderr, "knitshade render: warning: %s\n", w.c_str());

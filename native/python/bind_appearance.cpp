@@ -1161,6 +1161,17 @@ max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
           "Height of the shell top (the base mesh) above the yarn centre plane, pattern "
           "units.")
       .def_property_readonly(
+          "table_seconds", &KnitMaterial::table_seconds,
+          "Seconds the constructor spent on the multi-scale class table (building it, or "
+          "reading it from the class-table cache); 0 without one.")
+      .def_property_readonly(
+          "table_from_cache", &KnitMaterial::table_from_cache,
+          "Whether the class table came from the class-table cache (knitshade.set_table_cache).")
+      .def_property_readonly(
+          "table_cache_note", &KnitMaterial::table_cache_note,
+          "What went wrong with the class-table cache, if anything (a damaged entry, a "
+          "folder that cannot be written); the table was then built as without it.")
+      .def_property_readonly(
           "state_bytes", &KnitMaterial::state_bytes,
           "Memory the model keeps: pattern arrays, ply table, parameters (bytes).")
       .def("__repr__", [](const KnitMaterial& km) {

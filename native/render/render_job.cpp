@@ -8,6 +8,7 @@
 #include <fstream>
 #include <memory>
 
+#include "knit/table_cache.h"
 #include "knit/version.h"
 #include "render/output.h"
 #include "render/renderer.h"
@@ -41,9 +42,17 @@ RenderJobResult run_render_job(const RenderJob& job, const std::function<void(co
   }
   if (!job.report_file.empty()) check_folder(job.report_file, "report");
 
+  if (job.table_cache_dir) {
+    TableCacheSettings cache = table_cache();
+    cache.dir = *job.table_cache_dir;
+    set_table_cache(cache);
+  }
   SceneDesc desc = load_scene_file(job.scene_file, job.explicit_yarns && !job.knit_preview_diffuse);
   const double parse_seconds = since(t_start);
   Warnings warnings = desc.warnings;
+  for (const MaterialDesc& m : desc.materials)
+    if (m.type == MaterialType::Knit && m.knit.model && !m.knit.model->table_cache_note().empty())
+      warnings.messages.push_back(m.knit.model->table_cache_note());
   if (job.width) desc.film.width = *job.width;
   if (job.height) desc.film.height = *job.height;
   if (job.spp) desc.film.spp = *job.spp;
@@ -103,7 +112,10 @@ RenderJobResult run_render_job(const RenderJob& job, const std::function<void(co
   rep.threads = r.threads;
   // The knit materials' class tables are built while parsing: reported apart.
   for (const MaterialDesc& m : desc.materials)
-    if (m.type == MaterialType::Knit && m.knit.model) rep.knit_table_seconds += m.knit.model->table_seconds();
+    if (m.type == MaterialType::Knit && m.knit.model && m.knit.model->footprint_table()) {
+      rep.knit_table_seconds += m.knit.model->table_seconds();
+      ++(m.knit.model->table_from_cache() ? rep.knit_tables_cached : rep.knit_tables_built);
+    }
   rep.parse_seconds = std::max(0.0, parse_seconds - rep.knit_table_seconds);
   rep.load_seconds = scene.stats().load_seconds;
   rep.build_seconds = scene.stats().build_seconds;

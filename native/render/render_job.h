@@ -29,6 +29,10 @@ struct RenderJob {
   // fractions at its edges), for `knitshade compare --mask`.
   std::string mask_object;
   DisplaySettings display;
+  // The class-table cache's folder for this job's multi-scale materials
+  // (knit/table_cache.h; empty: no cache); unset: the process's setting as
+  // it stands (off unless the host turned it on).
+  std::optional<std::string> table_cache_dir;
 };
 
 struct RenderJobResult {

@@ -43,8 +43,15 @@ std::string RenderReport::to_text() const {
   // The knit class tables are built while the scene is parsed; parse_seconds
   // leaves them out, so the parts still add up to the wall time.
   // Explicit yarns: sweeping the tubes and building their BVH.
-  char tables[64] = "", yarns[64] = "";
-  if (knit_table_seconds > 0) std::snprintf(tables, sizeof tables, "knit class tables %.2f, ", knit_table_seconds);
+  char tables[96] = "", yarns[64] = "";
+  const int ntables = knit_tables_built + knit_tables_cached;
+  if (ntables > 0 && knit_tables_cached == ntables)
+    std::snprintf(tables, sizeof tables, "knit class tables %.2f from the cache, ", knit_table_seconds);
+  else if (knit_tables_cached > 0)
+    std::snprintf(tables, sizeof tables, "knit class tables %.2f (%d of %d from the cache), ", knit_table_seconds,
+                  knit_tables_cached, ntables);
+  else if (ntables > 0 || knit_table_seconds > 0)
+    std::snprintf(tables, sizeof tables, "knit class tables %.2f, ", knit_table_seconds);
   if (explicit_yarns) std::snprintf(yarns, sizeof yarns, "yarns %.2f, ", yarn_build_seconds);
   std::snprintf(buf, sizeof buf, "  wall time   %.2f s (parse %.2f, %sload %.2f, %sBVH %.2f, render %.2f, write %.2f)\n",
                 total_seconds, parse_seconds, tables, load_seconds, yarns, build_seconds, render_seconds,
@@ -128,6 +135,7 @@ std::string RenderReport::to_json() const {
   j["seconds"] = {{"parse", parse_seconds}, {"knit_tables", knit_table_seconds}, {"load", load_seconds},
                   {"yarns", yarn_build_seconds}, {"build", build_seconds},
                   {"render", render_seconds}, {"write", write_seconds}, {"total", total_seconds}};
+  j["knit_tables"] = {{"built", knit_tables_built}, {"from_cache", knit_tables_cached}};
   j["samples"] = samples;
   j["samples_per_second"] = samples_per_second();
   j["rays"] = {{"camera", camera_rays}, {"bounce", bounce_rays}, {"shadow", shadow_rays}, {"total", total_rays()}};

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "knit/yarns.h"
+#include "table_cache_internal.h"
 
 namespace knit {
 namespace {
@@ -106,9 +107,24 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
   // keep the marched aggregate.
   if (params_.mode == KnitMode::MultiScale && params_.footprint_table && surface_.geom().has_floats == 0) {
     const auto t0 = std::chrono::steady_clock::now();
-    table_ = std::make_shared<const FootprintTable>(surface_, params_.capm_options, 256,
-                                                    FootprintTable::LayerCounts::Auto, params_.table_min_cells < 1);
-    if (params_.table_bsdf) table_bsdf_ = std::make_shared<const TableBsdf>(*this, *table_);
+    ClassTableBuild build;
+    build.sub_cells = params_.table_min_cells < 1;
+    build.table_bsdf = params_.table_bsdf;
+    const TableCacheSettings cache = table_cache();
+    const ClassTableEntry entry = class_table_entry(*this, build, cache);
+    table_cache_file_ = entry.path;
+    table_from_cache_ = load_class_tables(entry, build, surface_.pattern().codes().size(), table_, table_bsdf_,
+                                          table_cache_note_);
+    if (!table_from_cache_) {
+      table_ = std::make_shared<const FootprintTable>(surface_, params_.capm_options, build.rays_per_direction,
+                                                      FootprintTable::LayerCounts::Auto, build.sub_cells);
+      table_bsdf_.reset();
+      if (build.table_bsdf)
+        table_bsdf_ = std::make_shared<const TableBsdf>(*this, *table_, build.hits_per_view, build.march_stride);
+      std::string store_note;
+      store_class_tables(entry, cache, *table_, table_bsdf_.get(), store_note);
+      if (!store_note.empty()) table_cache_note_ += (table_cache_note_.empty() ? "" : "; ") + store_note;
+    }
     table_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
 }

@@ -10,6 +10,7 @@ KnitSurface (capm, query, aggregate), which the geometry tests check against
 explicit yarns.
 """
 import math
+import pathlib
 import pickle
 import unittest
 
@@ -1047,6 +1048,52 @@ class KnitMaterialInterface(unittest.TestCase):
                         method(args["u"], args["v"], args["ray_dir"],
                                **{k: val for k, val in args.items() if k not in ("u", "v", "ray_dir")})
                     self.assertIn(message, str(cm.exception))
+
+
+class TableCacheTest(unittest.TestCase):
+    """knitshade.set_table_cache: the second multi-scale material of the same
+    pattern and parameters reads its class table from the folder and shades
+    as the first, bit for bit; None turns the cache off."""
+
+    def tearDown(self):
+        knitshade.set_table_cache(None)
+
+    def test_second_material_reads_the_first_ones_table(self):
+        import tempfile
+        stockinette = knitshade.Pattern.from_rows([[0]])
+        with tempfile.TemporaryDirectory() as tmp:
+            self.assertIsNone(knitshade.table_cache())
+            knitshade.set_table_cache(pathlib.Path(tmp))
+            self.assertEqual(knitshade.table_cache(), tmp)
+            first = knitshade.KnitMaterial(stockinette, mode="multi_scale", uv_scale=1.0)
+            second = knitshade.KnitMaterial(stockinette, mode="multi_scale", uv_scale=1.0)
+            self.assertFalse(first.table_from_cache)
+            self.assertTrue(second.table_from_cache)
+            self.assertEqual(first.table_cache_note, "")
+            self.assertEqual(len(list(pathlib.Path(tmp).glob("*.knittable"))), 1)
+            self.assertLess(second.table_seconds, first.table_seconds)
+            # Footprints of several cells, from the class table: the same shading.
+            rng = np.random.default_rng(5)
+            n = 64
+            u, v = rng.uniform(0, 30, n), rng.uniform(0, 30, n)
+            d = -random_view(rng, n)
+            fp = [20.0, 0.0, 0.0, 20.0]
+            a = first.shade(u, v, d, footprint=fp, shift=[0.3, 0.7])
+            b = second.shade(u, v, d, footprint=fp, shift=[0.3, 0.7])
+            self.assertTrue(np.all(a["steps"] == 0), "a cell or more in both directions: the class table")
+            for key in a:
+                np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+            knitshade.set_table_cache(None)
+            self.assertIsNone(knitshade.table_cache())
+            third = knitshade.KnitMaterial(stockinette, mode="multi_scale", uv_scale=1.0)
+            self.assertFalse(third.table_from_cache)
+
+    def test_bad_arguments(self):
+        with self.assertRaises(ValueError):
+            knitshade.set_table_cache("")
+        with self.assertRaises(ValueError):
+            knitshade.set_table_cache("/tmp", max_bytes=0)
+        self.assertIsInstance(knitshade.default_table_cache_dir(), str)
 
 
 if __name__ == "__main__":

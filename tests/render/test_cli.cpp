@@ -270,9 +270,12 @@ TEST(Cli, ReportsTheClassTableBuildApartFromParsing) {
   const std::string scene = test::write_file(
       dir, "scene.json",
       small_scene(R"({"type": "knit", "pattern": ["KP", "PK"], "uv_scale": 40, "mode": "multi_scale", "yarn_colors": [[0.7, 0.1, 0.1]]})"));
-  const CliRun r = run(dir, "render " + scene + " -o " + dir + "/ms.exr --report " + dir + "/ms.json");
+  // (--no-cache: built here, not read from the class-table cache)
+  const CliRun r = run(dir, "render " + scene + " -o " + dir + "/ms.exr --no-cache --report " + dir + "/ms.json");
   ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json rep = nlohmann::json::parse(test::read_file(dir + "/ms.json"));
+  EXPECT_EQ(rep["knit_tables"]["built"], 1);
+  EXPECT_EQ(rep["knit_tables"]["from_cache"], 0);
   const nlohmann::json& s = rep["seconds"];
   const double tables = s["knit_tables"].get<double>();
   // Seed stitch: several classes, hundreds of thousands of marched rays, never 0 s.
@@ -311,6 +314,82 @@ TEST(Cli, ReportsTheClassTableBuildApartFromParsing) {
   const CliRun b = run(dir, "render " + bad + " -o " + dir + "/bad.exr --explicit-yarns");
   EXPECT_EQ(b.code, 1);
   EXPECT_NE(b.err.find("footprint_table"), std::string::npos) << b.err;
+}
+
+// An EXR's pixels (its header carries the time it was written).
+std::vector<float> exr_pixels(const std::string& path) {
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) return {};
+  const OIIO::ImageSpec& spec = in->spec();
+  std::vector<float> px(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
+  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data())) return {};
+  return px;
+}
+
+TEST(Cli, ClassTablesComeFromTheCacheTheSecondTime) {
+  // Two multi-scale knits (one of two colours); the first render builds and
+  // keeps their class tables, the second reads them, and its image is the
+  // first's to the last bit. --no-cache builds them again and keeps nothing.
+  const std::string dir = test::test_dir();
+  const std::string cache = dir + "/cache";
+  std::filesystem::remove_all(cache);
+  nlohmann::json j = nlohmann::json::parse(small_scene(
+      R"({"type": "knit", "pattern": ["KP", "PK"], "uv_scale": 40, "mode": "multi_scale", "yarn_colors": [[0.7, 0.1, 0.1]]})"));
+  j["materials"]["two"] = {{"type", "knit"}, {"pattern", {"KK", "KK"}}, {"colors", {{0, 1}, {1, 0}}}, {"uv_scale", 40},
+                           {"mode", "multi_scale"}, {"yarn_colors", {{0.7, 0.1, 0.1}, {0.1, 0.2, 0.7}}}};
+  j["objects"].push_back(j["objects"][0]);
+  j["objects"][1]["material"] = "two";
+  j["objects"][1]["transform"]["translate"] = {0.5, 0.2, -0.5};
+  const std::string scene = test::write_file(dir, "scene.json", j.dump());
+  auto render = [&](const std::string& name, const std::string& how) {
+    const CliRun r = run(dir, "render " + scene + " -o " + dir + "/" + name + ".exr " + how + " --report " + dir + "/" +
+                                  name + ".json");
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+    return std::make_pair(r, nlohmann::json::parse(test::read_file(dir + "/" + name + ".json")));
+  };
+  const auto [r1, first] = render("first", "--cache-dir " + cache);
+  EXPECT_EQ(first["knit_tables"]["built"], 2);
+  EXPECT_EQ(first["knit_tables"]["from_cache"], 0);
+  int entries = 0;
+  for (const auto& e : std::filesystem::directory_iterator(cache)) entries += e.path().extension() == ".knittable";
+  EXPECT_EQ(entries, 2);
+  const auto [r2, second] = render("second", "--cache-dir " + cache);
+  EXPECT_EQ(second["knit_tables"]["built"], 0);
+  EXPECT_EQ(second["knit_tables"]["from_cache"], 2);
+  EXPECT_NE(r2.out.find("knit class tables"), std::string::npos) << r2.out;
+  EXPECT_NE(r2.out.find("from the cache"), std::string::npos) << r2.out;
+  EXPECT_LT(second["seconds"]["knit_tables"].get<double>(), first["seconds"]["knit_tables"].get<double>());
+  const std::vector<float> image = exr_pixels(dir + "/first.exr");
+  ASSERT_EQ(image.size(), size_t(24 * 16 * 3));
+  EXPECT_TRUE(exr_pixels(dir + "/second.exr") == image);
+  // $KNITSHADE_CACHE_DIR is the default folder (the tests point it into the
+  // build folder); --no-cache reads and writes nothing.
+  const std::string none = dir + "/none";
+  std::filesystem::remove_all(none);
+  const CliRun r3 = run(dir, "render " + scene + " -o " + dir + "/third.exr --no-cache --report " + dir + "/third.json");
+  ASSERT_EQ(r3.code, 0) << r3.err;
+  const nlohmann::json third = nlohmann::json::parse(test::read_file(dir + "/third.json"));
+  EXPECT_EQ(third["knit_tables"]["built"], 2);
+  EXPECT_TRUE(exr_pixels(dir + "/third.exr") == image);
+  const CliRun env = run(dir, "render " + scene + " -o " + dir + "/fourth.exr --quiet");  // (no KNITSHADE_CACHE_DIR change)
+  EXPECT_EQ(env.code, 0) << env.err;
+  // A damaged entry: a warning naming it, the tables built again, the same image.
+  for (const auto& e : std::filesystem::directory_iterator(cache)) {
+    std::string bytes = test::read_file(e.path().string());
+    bytes[bytes.size() / 2] ^= 1;
+    test::write_file(cache, e.path().filename().string(), bytes);
+    break;
+  }
+  const CliRun r5 = run(dir, "render " + scene + " -o " + dir + "/fifth.exr --cache-dir " + cache);
+  EXPECT_EQ(r5.code, 0) << r5.err;
+  EXPECT_NE(r5.err.find("warning: class-table cache entry " + cache + "/"), std::string::npos) << r5.err;
+  EXPECT_NE(r5.err.find("is damaged (checksum); built the tables again"), std::string::npos) << r5.err;
+  EXPECT_NE(r5.out.find("(1 of 2 from the cache)"), std::string::npos) << r5.out;
+  EXPECT_TRUE(exr_pixels(dir + "/fifth.exr") == image);
+  // Both options at once, or an empty folder name: usage errors.
+  EXPECT_EQ(run(dir, "render " + scene + " -o x.exr --cache-dir " + cache + " --no-cache").code, 2);
+  EXPECT_EQ(run(dir, "render " + scene + " -o x.exr --cache-dir ''").code, 2);
 }
 
 TEST(Cli, CompareReportsLinearErrors) {

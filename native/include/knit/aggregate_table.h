@@ -174,6 +174,8 @@ class FootprintTable {
   int classes_present() const { return slots_; }
 
  private:
+  friend struct TableCacheCodec;  // reads and writes the state below (src/table_cache.cpp)
+  FootprintTable() = default;     // (for TableCacheCodec, which fills it)
   // The four grid nodes around a direction and their bilinear weights.
   using DirWeights = SphereNodes;  // node = theta * kPhiBins + phi
   static DirWeights dir_weights(Vec3 wi_local) { return sphere_nodes(wi_local, kThetaBins, kPhiBins); }

@@ -15,6 +15,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <string>
 
 #include "knit/aggregate_table.h"
 #include "knit/bsdf.h"
@@ -26,6 +27,8 @@ namespace knit {
 
 enum class KnitMode { NearField = 0, MultiScale = 1 };
 
+// (A field added here must also go into the class-table cache's key,
+// put_key in src/table_cache.cpp, if the class table may depend on it.)
 struct KnitMaterialParams {
   StitchParams stitch;
   YarnBsdfParams bsdf;
@@ -163,6 +166,14 @@ class KnitMaterial {
   // Wall time the constructor spent building the multi-scale class table
   // (0 without one): most of a multi-scale material's set-up.
   double table_seconds() const { return table_seconds_; }
+  // Whether the class table and its tabulated BSDF were read from the
+  // class-table cache (knit/table_cache.h) rather than built; the entry's
+  // path (empty when the cache is off); and what went wrong with the cache,
+  // if anything (a damaged entry, a folder that cannot be written: the
+  // tables were then built as without it), for the host to show.
+  bool table_from_cache() const { return table_from_cache_; }
+  const std::string& table_cache_file() const { return table_cache_file_; }
+  const std::string& table_cache_note() const { return table_cache_note_; }
   // The class table's tabulated BSDF (multi-scale with footprint_table and
   // table_bsdf), else null.
   const TableBsdf* table_bsdf() const { return table_bsdf_.get(); }
@@ -221,6 +232,8 @@ class KnitMaterial {
   std::shared_ptr<const FootprintTable> table_;  // multi-scale with footprint_table: built at construction
   std::shared_ptr<const TableBsdf> table_bsdf_;  // with table_ when params_.table_bsdf
   double table_seconds_ = 0;  // what table_seconds() returns
+  bool table_from_cache_ = false;
+  std::string table_cache_file_, table_cache_note_;
   float arc_per_t_ = 1;     // mean arc length of the yarn per unit of curve parameter
   float mean_shadow_ = 1;   // ply shadow averaged around and along the yarn
   KnitShade unshaded_;      // what unshaded() returns, set up once

@@ -133,7 +133,7 @@ class TableBsdf {
   int colours() const { return colours_; }
 
   size_t bytes() const { return sizeof(*this) + values_.size() * sizeof(uint16_t) + rows_.size() * sizeof(float); }
-  double build_seconds() const { return seconds_; }
+  double build_seconds() const { return seconds_; }  // (0 when read from the class-table cache)
   // The tabulated A, Br, Bt (without V) and the lit share of entry `slot`
   // (a class slot; folded, class slot * colours() + colour), view node
   // `view`, light node `light` (as stored; folded: red, green, blue and
@@ -146,6 +146,8 @@ class TableBsdf {
   static const std::vector<double>& sphere_overlaps();
 
  private:
+  friend struct TableCacheCodec;  // reads and writes the state below (src/table_cache.cpp)
+  TableBsdf() = default;          // (for TableCacheCodec, which fills it)
   // The density of sample() in the cell of the node nearest to a
   // direction (theta and phi within half a node spacing: the heaviest of
   // its bilinear corners `c`), and the solid angle of a row's cells.

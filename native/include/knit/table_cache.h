@@ -1,0 +1,46 @@
+// The class-table cache: multi-scale materials keep their class table and
+// tabulated BSDF (FootprintTable, TableBsdf) on disk between runs, so that
+// the second render of a scene does not build them again (about 0.4-1.6 s
+// per material on 2 cores, docs/multiscale.md, "The class-table cache").
+//
+// An entry is found by a key made of everything the build reads: the
+// pattern, every material parameter, the build's own settings, the SIMD
+// path that counts the layers and the GNU build id of the binary that holds
+// this code (so an entry never outlives the code that wrote it). The key is
+// stored in the entry and compared in full, and a checksum covers the
+// whole file: a damaged entry, one of another key or an unreadable folder
+// means a build, as if there were no cache, with a note saying why
+// (KnitMaterial::table_cache_note), never a failed load. A loaded table is
+// the built one to the last bit.
+//
+// Process-wide and off by default: the CLI turns it on (its --cache-dir and
+// --no-cache; default_table_cache_dir()), the Python module through
+// knitshade.set_table_cache.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace knit {
+
+struct TableCacheSettings {
+  std::string dir;                         // the entries' folder; empty: no cache
+  uint64_t max_bytes = uint64_t(512) << 20;  // after a write the folder's entries are trimmed to this, oldest first
+};
+
+// The settings every KnitMaterial constructed afterwards uses (thread-safe).
+void set_table_cache(const TableCacheSettings& settings);
+TableCacheSettings table_cache();
+
+// $KNITSHADE_CACHE_DIR if set ("off": no cache, returned as ""), else
+// $XDG_CACHE_HOME/knitshade, else $HOME/.cache/knitshade, else "".
+std::string default_table_cache_dir();
+
+// The GNU build id (hex) of the binary that holds this library's code;
+// empty when it has none, and then nothing is cached.
+const std::string& library_build_id();
+
+// The file name of cache entries (their extension).
+inline constexpr const char* kTableCacheExtension = ".knittable";
+
+}  // namespace knit

@@ -1,0 +1,481 @@
+// The class-table cache (knit/table_cache.h).
+//
+// An entry is one file, <hash of the key>.knittable, in the cache folder:
+//
+//   "KNITTBL1"                      8 bytes
+//   key size (u64), key             everything the build reads (class_table_entry)
+//   payload size (u64), payload     the FootprintTable, then a flag and the TableBsdf
+//   FNV-1a 64 of all bytes before   (u64)
+//
+// in the machine's own byte order (the build id in the key pins the
+// machine's kind). Every size is checked against what is left of the file
+// before it is read, and the tables' shapes against each other after.
+#include "knit/table_cache.h"
+
+#include <link.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <random>
+#include <system_error>
+#include <type_traits>
+#include <vector>
+
+#include "knit/shading.h"
+#include "table_cache_internal.h"
+
+namespace knit {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::mutex g_mutex;
+TableCacheSettings g_settings;  // dir empty: off
+
+constexpr char kMagic[8] = {'K', 'N', 'I', 'T', 'T', 'B', 'L', '1'};
+constexpr uint64_t kMaxEntryBytes = uint64_t(1) << 30;  // (a table is a few MiB at most)
+
+uint64_t fnv1a(const unsigned char* p, size_t n, uint64_t h = 0xcbf29ce484222325ull) {
+  for (size_t i = 0; i < n; ++i) {
+    h ^= p[i];
+    h *= 0x100000001b3ull;
+  }
+  return h;
+}
+
+// Bytes appended field by field.
+class Writer {
+ public:
+  template <class T>
+  void put(const T& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    const auto* p = reinterpret_cast<const unsigned char*>(&v);
+    bytes_.insert(bytes_.end(), p, p + sizeof(T));
+  }
+  template <class T>
+  void put_vector(const std::vector<T>& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    put(uint64_t(v.size()));
+    const auto* p = reinterpret_cast<const unsigned char*>(v.data());
+    bytes_.insert(bytes_.end(), p, p + v.size() * sizeof(T));
+  }
+  void put_string(const std::string& s) {
+    put(uint64_t(s.size()));
+    bytes_.insert(bytes_.end(), s.begin(), s.end());
+  }
+  std::vector<unsigned char>& bytes() { return bytes_; }
+
+ private:
+  std::vector<unsigned char> bytes_;
+};
+
+// Reads what a Writer wrote; every read fails (and stays failed) rather
+// than run past the end.
+class Reader {
+ public:
+  Reader(const unsigned char* p, size_t n) : p_(p), left_(n) {}
+  template <class T>
+  bool get(T& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    if (!ok_ || left_ < sizeof(T)) return ok_ = false;
+    std::memcpy(&v, p_, sizeof(T));
+    p_ += sizeof(T);
+    left_ -= sizeof(T);
+    return true;
+  }
+  template <class T>
+  bool get_vector(std::vector<T>& v) {
+    uint64_t n = 0;
+    if (!get(n) || n > left_ / sizeof(T)) return ok_ = false;
+    v.resize(size_t(n));
+    std::memcpy(v.data(), p_, size_t(n) * sizeof(T));
+    p_ += size_t(n) * sizeof(T);
+    left_ -= size_t(n) * sizeof(T);
+    return true;
+  }
+  bool ok() const { return ok_; }
+  size_t left() const { return left_; }
+
+ private:
+  const unsigned char* p_;
+  size_t left_;
+  bool ok_ = true;
+};
+
+struct BuildIdSearch {
+  uintptr_t addr = 0;
+  std::string id;
+};
+
+int find_build_id(struct dl_phdr_info* info, size_t, void* data) {
+  auto* s = static_cast<BuildIdSearch*>(data);
+  bool holds = false;
+  for (int i = 0; i < info->dlpi_phnum && !holds; ++i) {
+    const ElfW(Phdr)& ph = info->dlpi_phdr[i];
+    const uintptr_t lo = uintptr_t(info->dlpi_addr + ph.p_vaddr);
+    holds = ph.p_type == PT_LOAD && s->addr >= lo && s->addr < lo + ph.p_memsz;
+  }
+  if (!holds) return 0;
+  for (int i = 0; i < info->dlpi_phnum; ++i) {
+    const ElfW(Phdr)& ph = info->dlpi_phdr[i];
+    if (ph.p_type != PT_NOTE) continue;
+    const auto* p = reinterpret_cast<const unsigned char*>(info->dlpi_addr + ph.p_vaddr);
+    size_t left = ph.p_memsz;
+    while (left >= sizeof(ElfW(Nhdr))) {
+      ElfW(Nhdr) nh;
+      std::memcpy(&nh, p, sizeof nh);
+      const size_t name_at = sizeof nh, desc_at = name_at + ((nh.n_namesz + 3u) & ~size_t(3));
+      const size_t next = desc_at + ((nh.n_descsz + 3u) & ~size_t(3));
+      if (next > left) break;
+      if (nh.n_type == NT_GNU_BUILD_ID && nh.n_namesz == 4 && std::memcmp(p + name_at, "GNU", 4) == 0) {
+        static const char* hex = "0123456789abcdef";
+        for (size_t k = 0; k < nh.n_descsz; ++k) {
+          s->id += hex[p[desc_at + k] >> 4];
+          s->id += hex[p[desc_at + k] & 15];
+        }
+        return 1;
+      }
+      p += next;
+      left -= next;
+    }
+  }
+  return 1;  // the object holding the code, without a build id
+}
+
+// The key's fields. A field added to one of these structs must be added
+// here too (the static_asserts below catch most additions).
+static_assert(sizeof(StitchParams) == 4 * sizeof(float), "StitchParams changed: update the class-table key");
+static_assert(sizeof(CapmOptions) == sizeof(int) + 2 * sizeof(float), "CapmOptions changed: update the key");
+static_assert(sizeof(PlyParams) == 2 * sizeof(int) + 4 * sizeof(float), "PlyParams changed: update the key");
+static_assert(sizeof(YarnBsdfParams) == 8 * sizeof(float) + 2 * sizeof(std::vector<Rgb>),
+              "YarnBsdfParams changed: update the key");
+static_assert(sizeof(Rgb) == 3 * sizeof(float), "Rgb changed: update the key");
+
+void put_colours(Writer& w, const std::vector<Rgb>& cs) {
+  w.put(uint64_t(cs.size()));
+  for (const Rgb& c : cs) {
+    w.put(c.r);
+    w.put(c.g);
+    w.put(c.b);
+  }
+}
+
+void put_key(Writer& w, const KnitMaterial& m, const ClassTableBuild& b) {
+  w.put_string("knitshade class table, format 1");
+  w.put_string(library_build_id());
+  const KnitSurface& s = m.surface();
+  w.put_string(KnitSurface::batch_isa_name(s.batch_isa(KnitSurface::BatchPath::Auto)));
+  const Pattern& pat = s.pattern();
+  w.put(int32_t(pat.rows()));
+  w.put(int32_t(pat.cols()));
+  w.put_vector(pat.codes());
+  w.put_vector(pat.colors_or_zero());
+  const KnitMaterialParams& p = m.params();
+  w.put(p.stitch.a);
+  w.put(p.stitch.h);
+  w.put(p.stitch.d);
+  w.put(p.stitch.r);
+  const YarnBsdfParams& y = p.bsdf;
+  for (float v : {y.roughness_x, y.roughness_y, y.trans_roughness_x, y.trans_roughness_y, y.eta, y.body_energy,
+                  y.body_reflect, y.optical_depth})
+    w.put(v);
+  put_colours(w, y.reflect_colors);
+  put_colours(w, y.transmit_colors);
+  w.put(int32_t(p.ply.ply_count));
+  w.put(p.ply.ply_radius);
+  w.put(p.ply.ply_twist);
+  w.put(int32_t(p.ply.fiber_count));
+  w.put(p.ply.fiber_twist);
+  w.put(p.ply.yarn_radius);
+  for (bool v : {p.ply_detail, p.capm, p.footprint_table, p.table_bsdf, p.table_fold, p.self_shadowing,
+                 p.near_field_below_cell})
+    w.put(uint8_t(v));
+  w.put(int32_t(p.mode));
+  w.put(int32_t(p.footprint_points));
+  w.put(p.table_min_cells);
+  w.put(p.uv_scale);
+  w.put(int32_t(p.capm_options.max_steps));
+  w.put(p.capm_options.max_segment);
+  w.put(p.capm_options.max_bend);
+  w.put(int32_t(b.rays_per_direction));
+  w.put(uint8_t(b.sub_cells));
+  w.put(uint8_t(b.table_bsdf));
+  w.put(int32_t(b.hits_per_view));
+  w.put(int32_t(b.march_stride));
+}
+
+std::string hex64(uint64_t v) {
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
+  return buf;
+}
+
+std::string errno_text() { return std::strerror(errno); }
+
+}  // namespace
+
+// Reads and writes the tables' private state.
+struct TableCacheCodec {
+  static void put(Writer& w, const FootprintTable& t) {
+    w.put(t.slot_);
+    w.put(int32_t(t.slots_));
+    w.put_vector(t.moments_);
+    w.put_vector(t.sub_moments_);
+    w.put_vector(t.class_of_);
+    w.put(uint8_t(t.one_colour_));
+    w.put(int32_t(t.single_class_));
+    w.put(int32_t(t.period_rows_));
+    w.put(int32_t(t.period_cols_));
+    w.put_vector(t.prefix_);
+    w.put(t.class_of_slot_);
+  }
+  // False when the bytes do not make a table of `cells` pattern cells.
+  static bool get(Reader& r, FootprintTable& t, size_t cells) {
+    int32_t slots = 0, single = 0, prow = 0, pcol = 0;
+    uint8_t one = 0;
+    r.get(t.slot_);
+    r.get(slots);
+    r.get_vector(t.moments_);
+    r.get_vector(t.sub_moments_);
+    r.get_vector(t.class_of_);
+    r.get(one);
+    r.get(single);
+    r.get(prow);
+    r.get(pcol);
+    r.get_vector(t.prefix_);
+    r.get(t.class_of_slot_);
+    if (!r.ok() || slots < 1 || slots > FootprintTable::kClasses || prow < 1 || pcol < 1) return false;
+    t.slots_ = slots;
+    t.one_colour_ = one != 0;
+    t.single_class_ = single;
+    t.period_rows_ = prow;
+    t.period_cols_ = pcol;
+    const size_t nodes = size_t(FootprintTable::kThetaBins) * FootprintTable::kPhiBins;
+    const size_t sub_stride = t.one_colour_ ? size_t(FootprintTable::kSubStride1) : size_t(FootprintTable::kMoments);
+    if (t.moments_.size() != size_t(slots) * nodes * FootprintTable::kMoments) return false;
+    if (!t.sub_moments_.empty() &&
+        t.sub_moments_.size() != size_t(slots) * FootprintTable::kSub * FootprintTable::kSub * nodes * sub_stride)
+      return false;
+    if (t.class_of_.size() != cells) return false;
+    if (!t.prefix_.empty() && t.prefix_.size() != size_t(prow) * size_t(slots) * (size_t(pcol) + 1)) return false;
+    int present = 0;
+    for (int c = 0; c < FootprintTable::kClasses; ++c) {
+      const int s = t.slot_[size_t(c)];
+      if (s < -1 || s >= slots) return false;
+      if (s >= 0 && t.class_of_slot_[size_t(s)] != c) return false;
+      present += s >= 0;
+    }
+    if (present != slots) return false;
+    if (single != -1 && (slots != 1 || single < 0 || single >= FootprintTable::kClasses)) return false;
+    for (unsigned char c : t.class_of_)
+      if (c >= FootprintTable::kClasses || t.slot_[c] < 0) return false;
+    return true;
+  }
+  static void put(Writer& w, const TableBsdf& t) {
+    w.put(int32_t(t.slots_));
+    w.put(int32_t(t.classes_));
+    w.put(int32_t(t.colours_));
+    w.put(uint8_t(t.folded_));
+    w.put_vector(t.values_);
+    w.put_vector(t.rows_);
+    // (not its build time: an entry is the same bytes whenever it is built)
+  }
+  static bool get(Reader& r, TableBsdf& t, int classes) {
+    int32_t slots = 0, cls = 0, colours = 0;
+    uint8_t folded = 0;
+    r.get(slots);
+    r.get(cls);
+    r.get(colours);
+    r.get(folded);
+    r.get_vector(t.values_);
+    r.get_vector(t.rows_);
+    t.seconds_ = 0;  // (built elsewhere)
+    if (!r.ok() || cls != classes || slots < 1 || slots > TableBsdf::kMaxEntries || colours < 1) return false;
+    if (folded ? slots != cls * colours : (slots != cls || colours != 1)) return false;
+    t.slots_ = slots;
+    t.classes_ = cls;
+    t.colours_ = colours;
+    t.folded_ = folded != 0;
+    const size_t n = size_t(TableBsdf::kNodes);
+    return t.values_.size() == n * n * size_t(slots) * TableBsdf::kValues &&
+           t.rows_.size() == n * (TableBsdf::kTheta + 1) * size_t(slots) * 4;
+  }
+  static FootprintTable* new_table() { return new FootprintTable(); }
+  static TableBsdf* new_bsdf() { return new TableBsdf(); }
+};
+
+void set_table_cache(const TableCacheSettings& settings) {
+  std::lock_guard<std::mutex> lock(g_mutex);
+  g_settings = settings;
+}
+
+TableCacheSettings table_cache() {
+  std::lock_guard<std::mutex> lock(g_mutex);
+  return g_settings;
+}
+
+std::string default_table_cache_dir() {
+  const char* env = std::getenv("KNITSHADE_CACHE_DIR");
+  if (env && *env) return std::string(env) == "off" ? std::string() : std::string(env);
+  const char* xdg = std::getenv("XDG_CACHE_HOME");
+  if (xdg && *xdg == '/') return (fs::path(xdg) / "knitshade").string();  // (the spec: a relative one is ignored)
+  const char* home = std::getenv("HOME");
+  if (home && *home) return (fs::path(home) / ".cache" / "knitshade").string();
+  return {};
+}
+
+const std::string& library_build_id() {
+  static const std::string id = [] {
+    BuildIdSearch s;
+    s.addr = reinterpret_cast<uintptr_t>(&find_build_id);
+    dl_iterate_phdr(&find_build_id, &s);
+    return s.id;
+  }();
+  return id;
+}
+
+ClassTableEntry class_table_entry(const KnitMaterial& material, const ClassTableBuild& build,
+                                  const TableCacheSettings& settings) {
+  ClassTableEntry e;
+  if (settings.dir.empty() || library_build_id().empty()) return e;
+  Writer w;
+  put_key(w, material, build);
+  e.key.assign(w.bytes().begin(), w.bytes().end());
+  const auto* k = reinterpret_cast<const unsigned char*>(e.key.data());
+  e.path = (fs::path(settings.dir) / (hex64(fnv1a(k, e.key.size())) + kTableCacheExtension)).string();
+  return e;
+}
+
+bool load_class_tables(const ClassTableEntry& entry, const ClassTableBuild& build, size_t cells,
+                       std::shared_ptr<const FootprintTable>& table, std::shared_ptr<const TableBsdf>& bsdf,
+                       std::string& note) {
+  if (entry.key.empty()) return false;
+  std::error_code ec;
+  if (!fs::exists(entry.path, ec)) return false;
+  const auto damaged = [&](const std::string& why) {
+    note = "class-table cache entry " + entry.path + " " + why + "; built the tables again";
+    return false;
+  };
+  const uintmax_t size = fs::file_size(entry.path, ec);
+  if (ec) return damaged("cannot be read (" + ec.message() + ")");
+  if (size > kMaxEntryBytes) return damaged("is " + std::to_string(size) + " bytes, more than any entry");
+  std::vector<unsigned char> bytes(static_cast<size_t>(size));
+  {
+    std::ifstream in(entry.path, std::ios::binary);
+    if (!in || !in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(bytes.size())))
+      return damaged("cannot be read");
+  }
+  if (bytes.size() < sizeof kMagic + 3 * sizeof(uint64_t) || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0)
+    return damaged("is not a class-table cache entry (no KNITTBL1 header)");
+  uint64_t stored = 0;
+  std::memcpy(&stored, bytes.data() + bytes.size() - sizeof stored, sizeof stored);
+  if (fnv1a(bytes.data(), bytes.size() - sizeof stored) != stored) return damaged("is damaged (checksum)");
+  Reader r(bytes.data() + sizeof kMagic, bytes.size() - sizeof kMagic - sizeof stored);
+  std::vector<char> key;
+  r.get_vector(key);
+  if (!r.ok() || key.size() != entry.key.size() || std::memcmp(key.data(), entry.key.data(), key.size()) != 0)
+    return false;  // another material's entry under the same hash: not a fault, the build overwrites it
+  std::vector<unsigned char> payload;
+  r.get_vector(payload);
+  if (!r.ok() || r.left() != 0) return damaged("has a malformed payload");
+  Reader p(payload.data(), payload.size());
+  std::unique_ptr<FootprintTable> t(TableCacheCodec::new_table());
+  if (!TableCacheCodec::get(p, *t, cells)) return damaged("does not hold a class table of this pattern");
+  uint8_t has_bsdf = 0;
+  p.get(has_bsdf);
+  if (!p.ok() || (has_bsdf != 0) != build.table_bsdf) return damaged("has a malformed payload");
+  std::unique_ptr<TableBsdf> b;
+  if (has_bsdf) {
+    b.reset(TableCacheCodec::new_bsdf());
+    if (!TableCacheCodec::get(p, *b, t->classes_present())) return damaged("does not hold its tabulated BSDF");
+  }
+  if (p.left() != 0) return damaged("has bytes after its tables");
+  table.reset(t.release());
+  bsdf.reset(b.release());
+  // Used: its time is the folder's order for trimming (least recently used first).
+  fs::last_write_time(entry.path, fs::file_time_type::clock::now(), ec);
+  return true;
+}
+
+void store_class_tables(const ClassTableEntry& entry, const TableCacheSettings& settings,
+                        const FootprintTable& table, const TableBsdf* bsdf, std::string& note) {
+  if (entry.key.empty()) return;
+  Writer payload;
+  TableCacheCodec::put(payload, table);
+  payload.put(uint8_t(bsdf != nullptr));
+  if (bsdf) TableCacheCodec::put(payload, *bsdf);
+  Writer w;
+  for (char c : kMagic) w.put(c);
+  w.put_string(entry.key);
+  w.put_vector(payload.bytes());
+  w.put(fnv1a(w.bytes().data(), w.bytes().size()));
+  const std::vector<unsigned char>& bytes = w.bytes();
+
+  std::error_code ec;
+  const fs::path dir = fs::path(entry.path).parent_path();
+  fs::create_directories(dir, ec);
+  if (ec) {
+    note = "class-table cache folder " + dir.string() + " cannot be made (" + ec.message() + "); nothing cached";
+    return;
+  }
+  // A temporary name of this process and call, renamed over the entry:
+  // readers see the old entry or the whole new one, never a part.
+  static std::atomic<unsigned> counter{0};
+  const fs::path tmp = fs::path(entry.path).concat(".tmp." + std::to_string(long(getpid())) + "." +
+                                                   std::to_string(counter.fetch_add(1)));
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out || !out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size())) ||
+        !out.flush()) {
+      note = "class-table cache entry " + tmp.string() + " cannot be written (" + errno_text() + "); nothing cached";
+      out.close();
+      fs::remove(tmp, ec);
+      return;
+    }
+  }
+  fs::rename(tmp, entry.path, ec);
+  if (ec) {
+    note = "class-table cache entry " + entry.path + " cannot be written (" + ec.message() + "); nothing cached";
+    fs::remove(tmp, ec);
+    return;
+  }
+  // Trim the folder's entries to max_bytes, least recently used first (the
+  // one just written last of all).
+  struct Item {
+    fs::path path;
+    fs::file_time_type time;
+    uintmax_t size;
+  };
+  std::vector<Item> items;
+  uintmax_t total = 0;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    if (it->path().extension() != kTableCacheExtension) continue;
+    std::error_code e2;
+    const uintmax_t sz = it->file_size(e2);
+    const fs::file_time_type tm = it->last_write_time(e2);
+    if (e2) continue;
+    items.push_back({it->path(), tm, sz});
+    total += sz;
+  }
+  if (total <= settings.max_bytes) return;
+  std::sort(items.begin(), items.end(), [&](const Item& a, const Item& b) {
+    const bool an = a.path == fs::path(entry.path), bn = b.path == fs::path(entry.path);
+    if (an != bn) return bn;  // the new entry goes last
+    return a.time < b.time;
+  });
+  for (const Item& it : items) {
+    if (total <= settings.max_bytes || it.path == fs::path(entry.path)) break;
+    if (fs::remove(it.path, ec)) total -= it.size;
+  }
+}
+
+}  // namespace knit

@@ -1,0 +1,46 @@
+// What KnitMaterial's constructor asks of the class-table cache
+// (table_cache.cpp; the settings and the file format are described there
+// and in knit/table_cache.h).
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "knit/aggregate_table.h"
+#include "knit/table_bsdf.h"
+#include "knit/table_cache.h"
+
+namespace knit {
+
+class KnitMaterial;
+
+// The build's own settings, which the key holds beside the material's.
+struct ClassTableBuild {
+  int rays_per_direction = 256;  // FootprintTable
+  bool sub_cells = true;
+  bool table_bsdf = true;        // a TableBsdf is built beside it
+  int hits_per_view = 512;       // TableBsdf
+  int march_stride = 8;
+};
+
+// The entry of `material` and `build` in the cache folder: the key (empty
+// when nothing can be cached: no build id) and the file's path.
+struct ClassTableEntry {
+  std::string key;
+  std::string path;
+};
+ClassTableEntry class_table_entry(const KnitMaterial& material, const ClassTableBuild& build,
+                                  const TableCacheSettings& settings);
+
+// Reads the entry into table (and bsdf, when build.table_bsdf), for a
+// pattern of `cells` cells; false, with `note` saying why when it is not
+// simply absent or another key's, when it cannot be used.
+bool load_class_tables(const ClassTableEntry& entry, const ClassTableBuild& build, size_t cells,
+                       std::shared_ptr<const FootprintTable>& table, std::shared_ptr<const TableBsdf>& bsdf,
+                       std::string& note);
+// Writes the entry (atomically: a temporary file renamed), then trims the
+// folder to settings.max_bytes; on failure `note` says why.
+void store_class_tables(const ClassTableEntry& entry, const TableCacheSettings& settings,
+                        const FootprintTable& table, const TableBsdf* bsdf, std::string& note);
+
+}  // namespace knit

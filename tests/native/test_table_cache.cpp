@@ -1,0 +1,321 @@
+// The class-table cache (knit/table_cache.h): a material whose tables come
+// from the cache must hold the tables a build gives, bit for bit, and shade
+// as a material built without the cache; an entry that is damaged, another
+// material's or unwritable must cost a build and a note, never a wrong
+// table or a failed load; the folder is trimmed least recently used first.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "knit/shading.h"
+#include "knit/table_cache.h"
+
+namespace {
+
+using namespace knit;
+namespace fs = std::filesystem;
+
+// A fresh folder for the running test (under the build's test output).
+fs::path test_folder() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const fs::path dir = fs::path(KNIT_TEST_OUTPUT_DIR) / "table_cache" / info->name();
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+// Sets the process's cache for the scope of a test, then turns it off.
+struct CacheScope {
+  explicit CacheScope(const fs::path& dir, uint64_t max_bytes = uint64_t(512) << 20) {
+    set_table_cache({dir.string(), max_bytes});
+  }
+  ~CacheScope() { set_table_cache({}); }
+};
+
+// Multi-scale: one class (stockinette, one colour: the quick build) unless
+// a pattern and palette are given.
+KnitMaterial material(const char* pattern = "K\n", std::vector<Rgb> colours = {Rgb{0.7f, 0.2f, 0.1f}},
+                      float r = 0.65f) {
+  KnitMaterialParams mp;
+  mp.mode = KnitMode::MultiScale;
+  mp.stitch.r = r;
+  mp.bsdf.reflect_colors = colours;
+  mp.bsdf.transmit_colors = colours;
+  return KnitMaterial(Pattern::parse(pattern), mp);
+}
+
+bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+// Everything the tables answer, compared bit for bit: the class table's
+// node and sub-cell statistics, the tabulated BSDF's every stored value,
+// and the shading of footprints of a cell and more seen from a few sides.
+void expect_same_tables(const KnitMaterial& a, const KnitMaterial& b) {
+  ASSERT_TRUE(a.footprint_table() && b.footprint_table());
+  const FootprintTable& ta = *a.footprint_table();
+  const FootprintTable& tb = *b.footprint_table();
+  EXPECT_EQ(ta.classes_present(), tb.classes_present());
+  EXPECT_TRUE(same_bits(ta.node_moments(), tb.node_moments()));
+  EXPECT_TRUE(same_bits(ta.sub_moments(), tb.sub_moments()));
+  EXPECT_EQ(ta.one_colour(), tb.one_colour());
+  EXPECT_EQ(ta.period_rows(), tb.period_rows());
+  EXPECT_EQ(ta.period_cols(), tb.period_cols());
+  ASSERT_TRUE(a.table_bsdf() && b.table_bsdf());
+  const TableBsdf& ba = *a.table_bsdf();
+  const TableBsdf& bb = *b.table_bsdf();
+  ASSERT_EQ(ba.folded(), bb.folded());
+  ASSERT_EQ(ba.colours(), bb.colours());
+  const int entries = ta.classes_present() * (ba.folded() ? ba.colours() : 1);
+  int differ = 0;
+  for (int s = 0; s < entries; ++s)
+    for (int v = 0; v < TableBsdf::kNodes; ++v)
+      for (int l = 0; l < TableBsdf::kNodes; ++l) {
+        const auto x = ba.value(s, v, l), y = bb.value(s, v, l);
+        differ += std::memcmp(x.data(), y.data(), sizeof x) != 0;
+      }
+  EXPECT_EQ(differ, 0);
+  // Shading through the tables: base hits whose footprints span 1.5 and 4
+  // cells, from the front and at a slant.
+  int shaded = 0;
+  for (float span : {1.5f, 4.0f})
+    for (float slant : {0.0f, 0.6f, 1.2f}) {
+      BaseHit hit;
+      hit.u = 0.37f;
+      hit.v = 0.61f;
+      const float du = span * a.surface().cell_width() / a.params().uv_scale;
+      const float dv = span * a.surface().cell_height() / a.params().uv_scale;
+      hit.dudx = du;
+      hit.dvdy = dv;
+      const Vec3 dir = k::kv3_normalize(k::kv3(std::sin(slant), 0.3f * slant, -std::cos(slant)));
+      const KnitShade sa = a.shade(hit, dir, nullptr, {0.25f, 0.75f}, 0.5f);
+      const KnitShade sb = b.shade(hit, dir, nullptr, {0.25f, 0.75f}, 0.5f);
+      EXPECT_EQ(sa.from_table, sb.from_table);
+      shaded += sa.from_table;
+      EXPECT_EQ(std::memcmp(&sa.point, &sb.point, sizeof sa.point), 0) << span << " " << slant;
+      EXPECT_EQ(std::memcmp(&sa.kd_r, &sb.kd_r, sizeof sa.kd_r), 0);
+      EXPECT_EQ(sa.mix.n, sb.mix.n);
+      EXPECT_EQ(std::memcmp(sa.mix.share.data(), sb.mix.share.data(), sizeof sa.mix.share), 0);
+      if (sa.table_bsdf && sb.table_bsdf) {
+        const Vec3 wi = k::kv3_normalize(k::kv3(0.3f, -0.4f, 0.8f));
+        const Vec3 ea = sa.table_bsdf->eval(sa.mix, wi, Vec3{0.5f, 0.4f, 0.3f}, Vec3{0.5f, 0.4f, 0.3f});
+        const Vec3 eb = sb.table_bsdf->eval(sb.mix, wi, Vec3{0.5f, 0.4f, 0.3f}, Vec3{0.5f, 0.4f, 0.3f});
+        EXPECT_EQ(std::memcmp(&ea, &eb, sizeof ea), 0);
+      }
+    }
+  EXPECT_GT(shaded, 0);  // (the footprints did go through the tables)
+}
+
+std::vector<char> read_bytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::vector<char>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+void write_bytes(const fs::path& p, const std::vector<char>& b) {
+  std::ofstream out(p, std::ios::binary | std::ios::trunc);
+  out.write(b.data(), std::streamsize(b.size()));
+}
+
+TEST(TableCache, TheBinaryHasABuildId) {
+  // Without one nothing is cached; CMake asks the linker for one.
+  const std::string& id = library_build_id();
+  EXPECT_GE(id.size(), 16u) << id;
+  EXPECT_EQ(id.find_first_not_of("0123456789abcdef"), std::string::npos) << id;
+}
+
+TEST(TableCache, OffByDefaultAndItsDefaultFolder) {
+  EXPECT_TRUE(table_cache().dir.empty());
+  const KnitMaterial m = material();
+  EXPECT_FALSE(m.table_from_cache());
+  EXPECT_TRUE(m.table_cache_file().empty());
+  EXPECT_TRUE(m.table_cache_note().empty());
+
+  // default_table_cache_dir: $KNITSHADE_CACHE_DIR ("off": none), then
+  // $XDG_CACHE_HOME (absolute only), then $HOME.
+  struct Env {
+    const char* name;
+    std::string old;
+    bool had;
+  };
+  std::vector<Env> saved;
+  for (const char* n : {"KNITSHADE_CACHE_DIR", "XDG_CACHE_HOME", "HOME"}) {
+    const char* v = std::getenv(n);
+    saved.push_back({n, v ? v : "", v != nullptr});
+  }
+  setenv("HOME", "/home/knitter", 1);
+  setenv("XDG_CACHE_HOME", "/var/cache/me", 1);
+  setenv("KNITSHADE_CACHE_DIR", "/tmp/tables", 1);
+  EXPECT_EQ(default_table_cache_dir(), "/tmp/tables");
+  setenv("KNITSHADE_CACHE_DIR", "off", 1);
+  EXPECT_EQ(default_table_cache_dir(), "");
+  unsetenv("KNITSHADE_CACHE_DIR");
+  EXPECT_EQ(default_table_cache_dir(), "/var/cache/me/knitshade");
+  setenv("XDG_CACHE_HOME", "relative/cache", 1);
+  EXPECT_EQ(default_table_cache_dir(), "/home/knitter/.cache/knitshade");
+  unsetenv("XDG_CACHE_HOME");
+  EXPECT_EQ(default_table_cache_dir(), "/home/knitter/.cache/knitshade");
+  unsetenv("HOME");
+  EXPECT_EQ(default_table_cache_dir(), "");
+  for (const Env& e : saved) {
+    if (e.had)
+      setenv(e.name, e.old.c_str(), 1);
+    else
+      unsetenv(e.name);
+  }
+}
+
+TEST(TableCache, ACachedMaterialHoldsTheBuiltTablesBitForBit) {
+  const fs::path dir = test_folder();
+  const KnitMaterial plain = material("KP\nPK\n", {Rgb{0.7f, 0.2f, 0.1f}});  // cache off: built
+  CacheScope scope(dir);
+  const KnitMaterial first = material("KP\nPK\n", {Rgb{0.7f, 0.2f, 0.1f}});
+  EXPECT_FALSE(first.table_from_cache());
+  EXPECT_TRUE(first.table_cache_note().empty()) << first.table_cache_note();
+  ASSERT_FALSE(first.table_cache_file().empty());
+  EXPECT_TRUE(fs::is_regular_file(first.table_cache_file()));
+  EXPECT_EQ(fs::path(first.table_cache_file()).parent_path(), dir);
+  const KnitMaterial second = material("KP\nPK\n", {Rgb{0.7f, 0.2f, 0.1f}});
+  EXPECT_TRUE(second.table_from_cache());
+  EXPECT_TRUE(second.table_cache_note().empty()) << second.table_cache_note();
+  EXPECT_EQ(second.table_cache_file(), first.table_cache_file());
+  expect_same_tables(plain, second);
+  expect_same_tables(first, second);
+  // Only its own files in the folder: the entry, no temporary left over.
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    ++files;
+    EXPECT_EQ(e.path().extension(), kTableCacheExtension) << e.path();
+  }
+  EXPECT_EQ(files, 1);
+}
+
+TEST(TableCache, TwoColoursAndTheWalkFoldedForEachColour) {
+  // A pattern of two colour indices: the class table keeps its neighbour
+  // shares, and the folded BSDF one entry per class and colour.
+  const fs::path dir = test_folder();
+  const std::vector<Rgb> palette{Rgb{0.7f, 0.2f, 0.1f}, Rgb{0.1f, 0.3f, 0.7f}};
+  const char* pattern = "K K\nK K\ncolors:\n0 1\n1 0\n";
+  const KnitMaterial plain = material(pattern, palette);
+  ASSERT_FALSE(plain.footprint_table()->one_colour());
+  ASSERT_EQ(plain.table_bsdf()->colours(), 2);
+  CacheScope scope(dir);
+  const KnitMaterial first = material(pattern, palette);
+  const KnitMaterial second = material(pattern, palette);
+  EXPECT_FALSE(first.table_from_cache());
+  EXPECT_TRUE(second.table_from_cache());
+  expect_same_tables(plain, second);
+}
+
+TEST(TableCache, DamagedEntriesAreBuiltAgainWithANote) {
+  const fs::path dir = test_folder();
+  CacheScope scope(dir);
+  const KnitMaterial built = material();
+  const fs::path entry = built.table_cache_file();
+  const std::vector<char> good = read_bytes(entry);
+  ASSERT_GT(good.size(), 1000u);
+
+  struct Damage {
+    const char* what;
+    std::vector<char> bytes;
+    const char* note;
+  };
+  std::vector<Damage> cases;
+  std::vector<char> flipped = good;
+  flipped[flipped.size() / 2] ^= 0x10;  // one bit in the tables
+  cases.push_back({"a flipped bit", flipped, "is damaged (checksum)"});
+  cases.push_back({"cut in half", std::vector<char>(good.begin(), good.begin() + ptrdiff_t(good.size() / 2)),
+                   "is damaged (checksum)"});
+  cases.push_back({"empty", {}, "is not a class-table cache entry"});
+  cases.push_back({"another file", std::vector<char>(4096, 'x'), "is not a class-table cache entry"});
+  for (const Damage& d : cases) {
+    write_bytes(entry, d.bytes);
+    const KnitMaterial m = material();
+    EXPECT_FALSE(m.table_from_cache()) << d.what;
+    EXPECT_NE(m.table_cache_note().find(entry.string()), std::string::npos) << d.what << ": " << m.table_cache_note();
+    EXPECT_NE(m.table_cache_note().find(d.note), std::string::npos) << d.what << ": " << m.table_cache_note();
+    EXPECT_NE(m.table_cache_note().find("built the tables again"), std::string::npos) << m.table_cache_note();
+    expect_same_tables(built, m);
+    // ... and the build wrote a good entry in its place.
+    EXPECT_EQ(read_bytes(entry), good) << d.what;
+    const KnitMaterial again = material();
+    EXPECT_TRUE(again.table_from_cache()) << d.what;
+    EXPECT_TRUE(again.table_cache_note().empty()) << again.table_cache_note();
+  }
+}
+
+TEST(TableCache, AnotherMaterialsEntryIsNeverUsed) {
+  const fs::path dir = test_folder();
+  CacheScope scope(dir);
+  const KnitMaterial thick = material("K\n", {Rgb{0.7f, 0.2f, 0.1f}}, 0.65f);
+  const KnitMaterial thin = material("K\n", {Rgb{0.7f, 0.2f, 0.1f}}, 0.5f);
+  const KnitMaterial blue = material("K\n", {Rgb{0.1f, 0.2f, 0.7f}}, 0.65f);
+  // Every parameter is in the key: other radius, other colour, other file.
+  EXPECT_NE(thick.table_cache_file(), thin.table_cache_file());
+  EXPECT_NE(thick.table_cache_file(), blue.table_cache_file());
+  EXPECT_FALSE(thin.table_from_cache());
+  EXPECT_FALSE(blue.table_from_cache());
+  // The thin yarn's entry put where the thick one's belongs (as a collision
+  // of their hashes would): the key, stored whole, tells them apart.
+  fs::copy_file(thin.table_cache_file(), thick.table_cache_file(), fs::copy_options::overwrite_existing);
+  const KnitMaterial again = material("K\n", {Rgb{0.7f, 0.2f, 0.1f}}, 0.65f);
+  EXPECT_FALSE(again.table_from_cache());
+  EXPECT_TRUE(again.table_cache_note().empty()) << again.table_cache_note();
+  expect_same_tables(thick, again);
+  EXPECT_FALSE(same_bits(thin.footprint_table()->node_moments(), again.footprint_table()->node_moments()));
+}
+
+TEST(TableCache, AFolderThatCannotBeMadeIsANoteNotAFailure) {
+  const fs::path dir = test_folder();
+  write_bytes(dir / "a_file", {'x'});
+  CacheScope scope(dir / "a_file" / "cache");  // (a folder under a file: not even root can make it)
+  const KnitMaterial m = material();
+  EXPECT_FALSE(m.table_from_cache());
+  EXPECT_NE(m.table_cache_note().find("cannot be made"), std::string::npos) << m.table_cache_note();
+  EXPECT_NE(m.table_cache_note().find("nothing cached"), std::string::npos) << m.table_cache_note();
+  const KnitMaterial plain = [] {
+    set_table_cache({});
+    return material();
+  }();
+  expect_same_tables(plain, m);
+}
+
+TEST(TableCache, TheFolderIsTrimmedLeastRecentlyUsedFirst) {
+  const fs::path dir = test_folder();
+  uint64_t one = 0;
+  {
+    CacheScope scope(dir);
+    one = fs::file_size(material("K\n", {Rgb{0.5f, 0.5f, 0.5f}}).table_cache_file());
+  }
+  fs::remove_all(dir);
+  // Room for two entries (they are all the same size here).
+  CacheScope scope(dir, 2 * one + one / 2);
+  const std::string a = material("K\n", {Rgb{0.6f, 0.1f, 0.1f}}).table_cache_file();
+  const std::string b = material("K\n", {Rgb{0.1f, 0.6f, 0.1f}}).table_cache_file();
+  // Age them, b the younger; then use a, which makes it the youngest.
+  const auto now = fs::file_time_type::clock::now();
+  fs::last_write_time(a, now - std::chrono::hours(2));
+  fs::last_write_time(b, now - std::chrono::hours(1));
+  EXPECT_TRUE(material("K\n", {Rgb{0.6f, 0.1f, 0.1f}}).table_from_cache());
+  EXPECT_GT(fs::last_write_time(a), fs::last_write_time(b));
+  // A third entry: b, the least recently used, makes room for it.
+  const std::string c = material("K\n", {Rgb{0.1f, 0.1f, 0.6f}}).table_cache_file();
+  EXPECT_TRUE(fs::exists(a));
+  EXPECT_FALSE(fs::exists(b));
+  EXPECT_TRUE(fs::exists(c));
+  // Files that are not entries are not the cache's to remove.
+  write_bytes(dir / "notes.txt", std::vector<char>(size_t(3 * one), 'n'));
+  const std::string d = material("K\n", {Rgb{0.3f, 0.3f, 0.3f}}).table_cache_file();
+  EXPECT_TRUE(fs::exists(dir / "notes.txt"));
+  EXPECT_TRUE(fs::exists(d));
+  EXPECT_FALSE(fs::exists(a));  // now the oldest
+  EXPECT_TRUE(fs::exists(c));
+}
+
+}  // namespace
