@@ -24,7 +24,7 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
-#include <random>
+#include <stdexcept>
 #include <system_error>
 #include <type_traits>
 #include <vector>
@@ -341,6 +341,46 @@ const std::string& library_build_id() {
     return s.id;
   }();
   return id;
+}
+
+namespace {
+// Visits the entries of dir (path, size); throws naming dir when it cannot be read.
+template <class Visit>
+void for_each_entry(const std::string& dir, Visit&& visit) {
+  std::error_code ec;
+  if (!fs::exists(dir, ec)) return;
+  if (!fs::is_directory(dir, ec)) throw std::runtime_error(dir + ": not a folder");
+  fs::directory_iterator it(dir, ec), end;
+  for (; !ec && it != end; it.increment(ec)) {
+    if (it->path().extension() != kTableCacheExtension) continue;
+    std::error_code e2;
+    const uintmax_t size = it->file_size(e2);
+    if (!e2) visit(it->path(), uint64_t(size));
+  }
+  if (ec) throw std::runtime_error(dir + ": cannot be read (" + ec.message() + ")");
+}
+}  // namespace
+
+TableCacheUsage table_cache_usage(const std::string& dir) {
+  TableCacheUsage u;
+  for_each_entry(dir, [&](const fs::path&, uint64_t size) {
+    ++u.entries;
+    u.bytes += size;
+  });
+  return u;
+}
+
+TableCacheUsage clear_table_cache(const std::string& dir) {
+  std::vector<std::pair<fs::path, uint64_t>> found;
+  for_each_entry(dir, [&](const fs::path& p, uint64_t size) { found.emplace_back(p, size); });
+  TableCacheUsage removed;
+  for (const auto& [path, size] : found) {
+    std::error_code ec;
+    if (!fs::remove(path, ec) && ec) throw std::runtime_error(path.string() + ": cannot be removed (" + ec.message() + ")");
+    ++removed.entries;
+    removed.bytes += size;
+  }
+  return removed;
 }
 
 ClassTableEntry class_table_entry(const KnitMaterial& material, const ClassTableBuild& build,

@@ -390,6 +390,24 @@ TEST(Cli, ClassTablesComeFromTheCacheTheSecondTime) {
   // Both options at once, or an empty folder name: usage errors.
   EXPECT_EQ(run(dir, "render " + scene + " -o x.exr --cache-dir " + cache + " --no-cache").code, 2);
   EXPECT_EQ(run(dir, "render " + scene + " -o x.exr --cache-dir ''").code, 2);
+
+  // `knitshade cache`: the folder's entries and size; --clear removes the
+  // entries and nothing else.
+  test::write_file(cache, "notes.txt", "mine");
+  const CliRun show = run(dir, "cache --dir " + cache);
+  ASSERT_EQ(show.code, 0) << show.err;
+  EXPECT_NE(show.out.find("class-table cache " + cache + ": 2 entries, "), std::string::npos) << show.out;
+  const CliRun clear = run(dir, "cache --dir " + cache + " --clear");
+  ASSERT_EQ(clear.code, 0) << clear.err;
+  EXPECT_NE(clear.out.find("removed 2 entries"), std::string::npos) << clear.out;
+  EXPECT_NE(run(dir, "cache --dir " + cache).out.find(": 0 entries, 0.0 MiB"), std::string::npos);
+  EXPECT_TRUE(std::filesystem::exists(cache + "/notes.txt"));
+  // A folder that is not one: an error naming it; and usage errors.
+  const CliRun file = run(dir, "cache --dir " + cache + "/notes.txt");
+  EXPECT_EQ(file.code, 1);
+  EXPECT_NE(file.err.find(cache + "/notes.txt: not a folder"), std::string::npos) << file.err;
+  EXPECT_EQ(run(dir, "cache --frobnicate").code, 2);
+  EXPECT_EQ(run(dir, "cache --dir").code, 2);
 }
 
 TEST(Cli, CompareReportsLinearErrors) {

@@ -43,4 +43,14 @@ const std::string& library_build_id();
 // The file name of cache entries (their extension).
 inline constexpr const char* kTableCacheExtension = ".knittable";
 
+// The entries in folder `dir` (none when it does not exist), and
+// clear_table_cache: removes them (the *.knittable files, nothing else) and
+// says what it removed. Both throw std::runtime_error naming the folder
+// when it cannot be read, or an entry that cannot be removed.
+struct TableCacheUsage {
+  uint64_t entries = 0, bytes = 0;
+};
+TableCacheUsage table_cache_usage(const std::string& dir);
+TableCacheUsage clear_table_cache(const std::string& dir);
+
 }  // namespace knit
