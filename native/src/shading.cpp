@@ -113,8 +113,8 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
     const TableCacheSettings cache = table_cache();
     const ClassTableEntry entry = class_table_entry(*this, build, cache);
     table_cache_file_ = entry.path;
-    table_from_cache_ = load_class_tables(entry, build, surface_.pattern().codes().size(), table_, table_bsdf_,
-                                          table_cache_note_);
+    table_from_cache_ = load_class_tables(entry, build, surface_.pattern().rows(), surface_.pattern().cols(),
+                                          table_, table_bsdf_, table_cache_note_);
     if (!table_from_cache_) {
       table_ = std::make_shared<const FootprintTable>(surface_, params_.capm_options, build.rays_per_direction,
                                                       FootprintTable::LayerCounts::Auto, build.sub_cells);

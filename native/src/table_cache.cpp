@@ -238,8 +238,9 @@ struct TableCacheCodec {
     w.put_vector(t.prefix_);
     w.put(t.class_of_slot_);
   }
-  // False when the bytes do not make a table of `cells` pattern cells.
-  static bool get(Reader& r, FootprintTable& t, size_t cells) {
+  // False when the bytes do not make a table of a pattern of rows x cols cells.
+  static bool get(Reader& r, FootprintTable& t, int rows, int cols) {
+    const size_t cells = size_t(rows) * size_t(cols);
     int32_t slots = 0, single = 0, prow = 0, pcol = 0;
     uint8_t one = 0;
     r.get(t.slot_);
@@ -253,7 +254,10 @@ struct TableCacheCodec {
     r.get(pcol);
     r.get_vector(t.prefix_);
     r.get(t.class_of_slot_);
-    if (!r.ok() || slots < 1 || slots > FootprintTable::kClasses || prow < 1 || pcol < 1) return false;
+    // (the periods divide the pattern's rows and columns)
+    if (!r.ok() || slots < 1 || slots > FootprintTable::kClasses || prow < 1 || pcol < 1 || rows % prow != 0 ||
+        cols % pcol != 0)
+      return false;
     t.slots_ = slots;
     t.one_colour_ = one != 0;
     t.single_class_ = single;
@@ -275,7 +279,8 @@ struct TableCacheCodec {
       present += s >= 0;
     }
     if (present != slots) return false;
-    if (single != -1 && (slots != 1 || single < 0 || single >= FootprintTable::kClasses)) return false;
+    if (single != -1 && (slots != 1 || single < 0 || single >= FootprintTable::kClasses || t.slot_[size_t(single)] != 0))
+      return false;
     for (unsigned char c : t.class_of_)
       if (c >= FootprintTable::kClasses || t.slot_[c] < 0) return false;
     return true;
@@ -395,7 +400,50 @@ ClassTableEntry class_table_entry(const KnitMaterial& material, const ClassTable
   return e;
 }
 
-bool load_class_tables(const ClassTableEntry& entry, const ClassTableBuild& build, size_t cells,
+DecodeResult decode_class_tables(const std::vector<unsigned char>& bytes, const std::string& key,
+                                 const ClassTableBuild& build, int rows, int cols,
+                                 std::shared_ptr<const FootprintTable>& table,
+                                 std::shared_ptr<const TableBsdf>& bsdf) {
+  DecodeResult res;
+  const auto bad = [&](const char* why) {
+    res.why = why;
+    return res;
+  };
+  if (bytes.size() < sizeof kMagic + 3 * sizeof(uint64_t) || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0)
+    return bad("is not a class-table cache entry (no KNITTBL1 header)");
+  uint64_t stored = 0;
+  std::memcpy(&stored, bytes.data() + bytes.size() - sizeof stored, sizeof stored);
+  if (fnv1a(bytes.data(), bytes.size() - sizeof stored) != stored) return bad("is damaged (checksum)");
+  Reader r(bytes.data() + sizeof kMagic, bytes.size() - sizeof kMagic - sizeof stored);
+  std::vector<char> k;
+  r.get_vector(k);
+  if (!r.ok()) return bad("has a malformed key");
+  if (k.size() != key.size() || std::memcmp(k.data(), key.data(), k.size()) != 0) {
+    res.other_key = true;  // another material's entry under the same hash: not a fault
+    return res;
+  }
+  std::vector<unsigned char> payload;
+  r.get_vector(payload);
+  if (!r.ok() || r.left() != 0) return bad("has a malformed payload");
+  Reader p(payload.data(), payload.size());
+  std::unique_ptr<FootprintTable> t(TableCacheCodec::new_table());
+  if (!TableCacheCodec::get(p, *t, rows, cols)) return bad("does not hold a class table of this pattern");
+  uint8_t has_bsdf = 0;
+  p.get(has_bsdf);
+  if (!p.ok() || (has_bsdf != 0) != build.table_bsdf) return bad("has a malformed payload");
+  std::unique_ptr<TableBsdf> b;
+  if (has_bsdf) {
+    b.reset(TableCacheCodec::new_bsdf());
+    if (!TableCacheCodec::get(p, *b, t->classes_present())) return bad("does not hold its tabulated BSDF");
+  }
+  if (p.left() != 0) return bad("has bytes after its tables");
+  table.reset(t.release());
+  bsdf.reset(b.release());
+  res.ok = true;
+  return res;
+}
+
+bool load_class_tables(const ClassTableEntry& entry, const ClassTableBuild& build, int rows, int cols,
                        std::shared_ptr<const FootprintTable>& table, std::shared_ptr<const TableBsdf>& bsdf,
                        std::string& note) {
   if (entry.key.empty()) return false;
@@ -414,33 +462,9 @@ bool load_class_tables(const ClassTableEntry& entry, const ClassTableBuild& buil
     if (!in || !in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(bytes.size())))
       return damaged("cannot be read");
   }
-  if (bytes.size() < sizeof kMagic + 3 * sizeof(uint64_t) || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0)
-    return damaged("is not a class-table cache entry (no KNITTBL1 header)");
-  uint64_t stored = 0;
-  std::memcpy(&stored, bytes.data() + bytes.size() - sizeof stored, sizeof stored);
-  if (fnv1a(bytes.data(), bytes.size() - sizeof stored) != stored) return damaged("is damaged (checksum)");
-  Reader r(bytes.data() + sizeof kMagic, bytes.size() - sizeof kMagic - sizeof stored);
-  std::vector<char> key;
-  r.get_vector(key);
-  if (!r.ok() || key.size() != entry.key.size() || std::memcmp(key.data(), entry.key.data(), key.size()) != 0)
-    return false;  // another material's entry under the same hash: not a fault, the build overwrites it
-  std::vector<unsigned char> payload;
-  r.get_vector(payload);
-  if (!r.ok() || r.left() != 0) return damaged("has a malformed payload");
-  Reader p(payload.data(), payload.size());
-  std::unique_ptr<FootprintTable> t(TableCacheCodec::new_table());
-  if (!TableCacheCodec::get(p, *t, cells)) return damaged("does not hold a class table of this pattern");
-  uint8_t has_bsdf = 0;
-  p.get(has_bsdf);
-  if (!p.ok() || (has_bsdf != 0) != build.table_bsdf) return damaged("has a malformed payload");
-  std::unique_ptr<TableBsdf> b;
-  if (has_bsdf) {
-    b.reset(TableCacheCodec::new_bsdf());
-    if (!TableCacheCodec::get(p, *b, t->classes_present())) return damaged("does not hold its tabulated BSDF");
-  }
-  if (p.left() != 0) return damaged("has bytes after its tables");
-  table.reset(t.release());
-  bsdf.reset(b.release());
+  const DecodeResult d = decode_class_tables(bytes, entry.key, build, rows, cols, table, bsdf);
+  if (d.other_key) return false;  // (the build overwrites it)
+  if (!d.ok) return damaged(d.why);
   // Used: its time is the folder's order for trimming (least recently used first).
   fs::last_write_time(entry.path, fs::file_time_type::clock::now(), ec);
   return true;

@@ -5,6 +5,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "knit/aggregate_table.h"
 #include "knit/table_bsdf.h"
@@ -33,11 +34,24 @@ ClassTableEntry class_table_entry(const KnitMaterial& material, const ClassTable
                                   const TableCacheSettings& settings);
 
 // Reads the entry into table (and bsdf, when build.table_bsdf), for a
-// pattern of `cells` cells; false, with `note` saying why when it is not
+// pattern of rows x cols cells; false, with `note` saying why when it is not
 // simply absent or another key's, when it cannot be used.
-bool load_class_tables(const ClassTableEntry& entry, const ClassTableBuild& build, size_t cells,
+bool load_class_tables(const ClassTableEntry& entry, const ClassTableBuild& build, int rows, int cols,
                        std::shared_ptr<const FootprintTable>& table, std::shared_ptr<const TableBsdf>& bsdf,
                        std::string& note);
+// The bytes of an entry file decoded for `key`: ok, another key's entry,
+// or why it cannot be used (`why`, a phrase after the file's name). Every
+// size is checked before it is read and the tables' shapes after, so no
+// bytes make it read out of bounds (tests/native/test_table_cache.cpp
+// decodes mutated entries whose checksum was made to fit).
+struct DecodeResult {
+  bool ok = false, other_key = false;
+  const char* why = "";
+};
+DecodeResult decode_class_tables(const std::vector<unsigned char>& bytes, const std::string& key,
+                                 const ClassTableBuild& build, int rows, int cols,
+                                 std::shared_ptr<const FootprintTable>& table,
+                                 std::shared_ptr<const TableBsdf>& bsdf);
 // Writes the entry (atomically: a temporary file renamed), then trims the
 // folder to settings.max_bytes; on failure `note` says why.
 void store_class_tables(const ClassTableEntry& entry, const TableCacheSettings& settings,

@@ -12,9 +12,11 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <string>
 #include <vector>
 
+#include "../../native/src/table_cache_internal.h"  // decode_class_tables
 #include "knit/shading.h"
 #include "knit/table_cache.h"
 
@@ -316,6 +318,99 @@ TEST(TableCache, TheFolderIsTrimmedLeastRecentlyUsedFirst) {
   EXPECT_TRUE(fs::exists(d));
   EXPECT_FALSE(fs::exists(a));  // now the oldest
   EXPECT_TRUE(fs::exists(c));
+}
+
+// FNV-1a 64, the entries' checksum (native/src/table_cache.cpp's format).
+uint64_t fnv1a(const unsigned char* p, size_t n) {
+  uint64_t h = 0xcbf29ce484222325ull;
+  for (size_t i = 0; i < n; ++i) {
+    h ^= p[i];
+    h *= 0x100000001b3ull;
+  }
+  return h;
+}
+
+TEST(TableCache, MutatedEntriesAreRejectedOrReadInBounds) {
+  // Entries whose checksum was made to fit their damage (what no accident
+  // gives, but a writer's bug could): the decoder checks every size before
+  // it reads and the tables' shapes after, so each either is refused with a
+  // reason or gives tables that can be used. The seed stitch of two colours:
+  // several classes (prefix counts), sub-cells, neighbour shares, the fold.
+  const fs::path dir = test_folder();
+  CacheScope scope(dir);
+  const KnitMaterial m = material("K P\nP K\ncolors:\n0 1\n1 0\n", {Rgb{0.7f, 0.2f, 0.1f}, Rgb{0.1f, 0.3f, 0.7f}});
+  ClassTableBuild build;
+  build.sub_cells = true;
+  build.table_bsdf = true;
+  const ClassTableEntry entry = class_table_entry(m, build, table_cache());
+  ASSERT_EQ(entry.path, m.table_cache_file());
+  const std::vector<char> file = read_bytes(entry.path);
+  const std::vector<unsigned char> good(file.begin(), file.end());
+  const int rows = m.surface().pattern().rows(), cols = m.surface().pattern().cols();
+  {
+    std::shared_ptr<const FootprintTable> t;
+    std::shared_ptr<const TableBsdf> b;
+    ASSERT_TRUE(decode_class_tables(good, entry.key, build, rows, cols, t, b).ok);
+    EXPECT_TRUE(same_bits(t->node_moments(), m.footprint_table()->node_moments()));
+  }
+  // The layout: magic, key size and key, payload size and payload, checksum.
+  const size_t payload_size_at = 8 + 8 + entry.key.size(), payload_at = payload_size_at + 8;
+  const size_t payload_end = good.size() - 8;
+  ASSERT_GT(payload_end, payload_at + 1000);
+  std::mt19937 rng(3);
+  int refused = 0, read = 0;
+  const k::KnitGeom& g = m.surface().geom();
+  for (int trial = 0; trial < 3000; ++trial) {
+    std::vector<unsigned char> b = good;
+    const int kind = trial % 3;
+    const size_t at = payload_at + rng() % (payload_end - payload_at);
+    if (kind == 0) {
+      b[at] ^= static_cast<unsigned char>(1u << (rng() % 8));  // a bit anywhere in the tables
+    } else if (kind == 1) {
+      // a size or count in the first 200 bytes (the class table's header
+      // and its vectors' lengths), made large, negative or small
+      const size_t head = payload_at + rng() % 200;
+      const uint64_t v = rng() % 2 ? uint64_t(rng()) << (rng() % 40) : uint64_t(rng() % 64);
+      std::memcpy(&b[std::min(head, payload_end - 8)], &v, 8);
+    } else {
+      // the payload cut short, its size made to fit
+      const uint64_t cut = uint64_t(at - payload_at);
+      b.erase(b.begin() + ptrdiff_t(at), b.begin() + ptrdiff_t(payload_end));
+      std::memcpy(&b[payload_size_at], &cut, 8);
+    }
+    const uint64_t sum = fnv1a(b.data(), b.size() - 8);
+    std::memcpy(&b[b.size() - 8], &sum, 8);
+    std::shared_ptr<const FootprintTable> t;
+    std::shared_ptr<const TableBsdf> tb;
+    const DecodeResult d = decode_class_tables(b, entry.key, build, rows, cols, t, tb);
+    if (!d.ok) {
+      ++refused;
+      EXPECT_FALSE(d.other_key);
+      EXPECT_GT(std::strlen(d.why), 5u);
+      continue;
+    }
+    ++read;
+    // Read back: use them, as a render would (footprints of 1.5 and 3 cells,
+    // from above and at a slant).
+    for (float size : {1.5f, 3.0f}) {
+      const k::KFootprint f = k::knit_footprint(g, 10.0f, 20.0f, k::kv3(size * K_2PI, 0, 0),
+                                                k::kv3(0, size * g.row_spacing, 0), 4, 0.3f, 0.6f);
+      for (Vec3 wi : {k::kv3(0, 0, 1), k::kv3_normalize(k::kv3(0.6f, 0.2f, 0.5f))}) {
+        float slot_hits[FootprintTable::kClasses] = {};
+        const k::KnitAggregate a = t->aggregate(m.surface(), f, wi, slot_hits);
+        (void)a;
+        const TableBsdf::Mix mix = tb->mix(slot_hits, wi, 0.4f, 0.4f);
+        const Vec3 e = tb->eval(mix, k::kv3_normalize(k::kv3(-0.3f, 0.1f, 0.9f)), Vec3{0.5f, 0.5f, 0.5f},
+                                Vec3{0.5f, 0.5f, 0.5f});
+        (void)e;
+      }
+    }
+  }
+  // Most damage to sizes and every cut is refused; a flipped bit in the
+  // statistics is read (it changes a number, not a shape).
+  EXPECT_GT(refused, 1000);
+  EXPECT_GT(read, 500);
+  std::printf("mutated entries: %d refused, %d read and used\n", refused, read);
 }
 
 }  // namespace
