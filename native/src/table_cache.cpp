@@ -97,7 +97,7 @@ class Reader {
     uint64_t n = 0;
     if (!get(n) || n > left_ / sizeof(T)) return ok_ = false;
     v.resize(size_t(n));
-    std::memcpy(v.data(), p_, size_t(n) * sizeof(T));
+    if (n > 0) std::memcpy(v.data(), p_, size_t(n) * sizeof(T));  // (an empty vector's data() may be null)
     p_ += size_t(n) * sizeof(T);
     left_ -= size_t(n) * sizeof(T);
     return true;
@@ -225,51 +225,76 @@ std::string errno_text() { return std::strerror(errno); }
 
 // Reads and writes the tables' private state.
 struct TableCacheCodec {
+  // Each table's state, field by field, in one order for writing and for
+  // reading (io: Put or Get below).
+  template <class IO, class Table>
+  static void footprint_fields(IO& io, Table& t) {
+    io(t.slot_);
+    io(t.slots_);
+    io.vec(t.moments_);
+    io.vec(t.sub_moments_);
+    io.vec(t.class_of_);
+    io(t.one_colour_);
+    io(t.single_class_);
+    io(t.period_rows_);
+    io(t.period_cols_);
+    io.vec(t.prefix_);
+    io(t.class_of_slot_);
+  }
+  // (not its build time: an entry is the same bytes whenever it is built)
+  template <class IO, class Table>
+  static void bsdf_fields(IO& io, Table& t) {
+    io(t.slots_);
+    io(t.classes_);
+    io(t.colours_);
+    io(t.folded_);
+    io.vec(t.values_);
+    io.vec(t.rows_);
+  }
+  struct Put {
+    Writer& w;
+    template <class T>
+    void operator()(const T& v) { w.put(v); }
+    void operator()(bool v) { w.put(uint8_t(v)); }
+    template <class T>
+    void vec(const std::vector<T>& v) { w.put_vector(v); }
+  };
+  struct Get {
+    Reader& r;
+    template <class T>
+    void operator()(T& v) { r.get(v); }
+    void operator()(bool& v) {  // (a byte read as a bool must be 0 or 1)
+      uint8_t b = 0;
+      r.get(b);
+      v = b != 0;
+    }
+    template <class T>
+    void vec(std::vector<T>& v) { r.get_vector(v); }
+  };
   static void put(Writer& w, const FootprintTable& t) {
-    w.put(t.slot_);
-    w.put(int32_t(t.slots_));
-    w.put_vector(t.moments_);
-    w.put_vector(t.sub_moments_);
-    w.put_vector(t.class_of_);
-    w.put(uint8_t(t.one_colour_));
-    w.put(int32_t(t.single_class_));
-    w.put(int32_t(t.period_rows_));
-    w.put(int32_t(t.period_cols_));
-    w.put_vector(t.prefix_);
-    w.put(t.class_of_slot_);
+    Put io{w};
+    footprint_fields(io, t);
+  }
+  static void put(Writer& w, const TableBsdf& t) {
+    Put io{w};
+    bsdf_fields(io, t);
   }
   // False when the bytes do not make a table of a pattern of rows x cols cells.
   static bool get(Reader& r, FootprintTable& t, int rows, int cols) {
-    const size_t cells = size_t(rows) * size_t(cols);
-    int32_t slots = 0, single = 0, prow = 0, pcol = 0;
-    uint8_t one = 0;
-    r.get(t.slot_);
-    r.get(slots);
-    r.get_vector(t.moments_);
-    r.get_vector(t.sub_moments_);
-    r.get_vector(t.class_of_);
-    r.get(one);
-    r.get(single);
-    r.get(prow);
-    r.get(pcol);
-    r.get_vector(t.prefix_);
-    r.get(t.class_of_slot_);
+    Get io{r};
+    footprint_fields(io, t);
+    const int slots = t.slots_, prow = t.period_rows_, pcol = t.period_cols_, single = t.single_class_;
     // (the periods divide the pattern's rows and columns)
     if (!r.ok() || slots < 1 || slots > FootprintTable::kClasses || prow < 1 || pcol < 1 || rows % prow != 0 ||
         cols % pcol != 0)
       return false;
-    t.slots_ = slots;
-    t.one_colour_ = one != 0;
-    t.single_class_ = single;
-    t.period_rows_ = prow;
-    t.period_cols_ = pcol;
     const size_t nodes = size_t(FootprintTable::kThetaBins) * FootprintTable::kPhiBins;
     const size_t sub_stride = t.one_colour_ ? size_t(FootprintTable::kSubStride1) : size_t(FootprintTable::kMoments);
     if (t.moments_.size() != size_t(slots) * nodes * FootprintTable::kMoments) return false;
     if (!t.sub_moments_.empty() &&
         t.sub_moments_.size() != size_t(slots) * FootprintTable::kSub * FootprintTable::kSub * nodes * sub_stride)
       return false;
-    if (t.class_of_.size() != cells) return false;
+    if (t.class_of_.size() != size_t(rows) * size_t(cols)) return false;
     if (!t.prefix_.empty() && t.prefix_.size() != size_t(prow) * size_t(slots) * (size_t(pcol) + 1)) return false;
     int present = 0;
     for (int c = 0; c < FootprintTable::kClasses; ++c) {
@@ -285,31 +310,13 @@ struct TableCacheCodec {
       if (c >= FootprintTable::kClasses || t.slot_[c] < 0) return false;
     return true;
   }
-  static void put(Writer& w, const TableBsdf& t) {
-    w.put(int32_t(t.slots_));
-    w.put(int32_t(t.classes_));
-    w.put(int32_t(t.colours_));
-    w.put(uint8_t(t.folded_));
-    w.put_vector(t.values_);
-    w.put_vector(t.rows_);
-    // (not its build time: an entry is the same bytes whenever it is built)
-  }
   static bool get(Reader& r, TableBsdf& t, int classes) {
-    int32_t slots = 0, cls = 0, colours = 0;
-    uint8_t folded = 0;
-    r.get(slots);
-    r.get(cls);
-    r.get(colours);
-    r.get(folded);
-    r.get_vector(t.values_);
-    r.get_vector(t.rows_);
+    Get io{r};
+    bsdf_fields(io, t);
     t.seconds_ = 0;  // (built elsewhere)
+    const int slots = t.slots_, cls = t.classes_, colours = t.colours_;
     if (!r.ok() || cls != classes || slots < 1 || slots > TableBsdf::kMaxEntries || colours < 1) return false;
-    if (folded ? slots != cls * colours : (slots != cls || colours != 1)) return false;
-    t.slots_ = slots;
-    t.classes_ = cls;
-    t.colours_ = colours;
-    t.folded_ = folded != 0;
+    if (t.folded_ ? slots != cls * colours : (slots != cls || colours != 1)) return false;
     const size_t n = size_t(TableBsdf::kNodes);
     return t.values_.size() == n * n * size_t(slots) * TableBsdf::kValues &&
            t.rows_.size() == n * (TableBsdf::kTheta + 1) * size_t(slots) * 4;
