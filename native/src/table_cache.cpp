@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -356,18 +357,29 @@ const std::string& library_build_id() {
 }
 
 namespace {
-// Visits the entries of dir (path, size); throws naming dir when it cannot be read.
+// A temporary file of an entry being written (store_class_tables), left
+// behind when its process was stopped before renaming it.
+bool is_temporary(const fs::path& p) {
+  return p.filename().string().find(std::string(kTableCacheExtension) + ".tmp.") != std::string::npos;
+}
+
+// Visits the entries of dir (path, size, time of last use), and removes
+// temporaries more than an hour old; throws naming dir when it cannot be
+// read.
 template <class Visit>
 void for_each_entry(const std::string& dir, Visit&& visit) {
   std::error_code ec;
   if (!fs::exists(dir, ec)) return;
   if (!fs::is_directory(dir, ec)) throw std::runtime_error(dir + ": not a folder");
+  const auto stale = fs::file_time_type::clock::now() - std::chrono::hours(1);
   fs::directory_iterator it(dir, ec), end;
   for (; !ec && it != end; it.increment(ec)) {
-    if (it->path().extension() != kTableCacheExtension) continue;
     std::error_code e2;
+    const fs::file_time_type time = it->last_write_time(e2);
+    if (!e2 && is_temporary(it->path()) && time < stale) fs::remove(it->path(), e2);
+    if (it->path().extension() != kTableCacheExtension) continue;
     const uintmax_t size = it->file_size(e2);
-    if (!e2) visit(it->path(), uint64_t(size));
+    if (!e2) visit(it->path(), uint64_t(size), time);
   }
   if (ec) throw std::runtime_error(dir + ": cannot be read (" + ec.message() + ")");
 }
@@ -375,7 +387,7 @@ void for_each_entry(const std::string& dir, Visit&& visit) {
 
 TableCacheUsage table_cache_usage(const std::string& dir) {
   TableCacheUsage u;
-  for_each_entry(dir, [&](const fs::path&, uint64_t size) {
+  for_each_entry(dir, [&](const fs::path&, uint64_t size, fs::file_time_type) {
     ++u.entries;
     u.bytes += size;
   });
@@ -384,7 +396,7 @@ TableCacheUsage table_cache_usage(const std::string& dir) {
 
 TableCacheUsage clear_table_cache(const std::string& dir) {
   std::vector<std::pair<fs::path, uint64_t>> found;
-  for_each_entry(dir, [&](const fs::path& p, uint64_t size) { found.emplace_back(p, size); });
+  for_each_entry(dir, [&](const fs::path& p, uint64_t size, fs::file_time_type) { found.emplace_back(p, size); });
   TableCacheUsage removed;
   for (const auto& [path, size] : found) {
     std::error_code ec;
@@ -528,14 +540,14 @@ void store_class_tables(const ClassTableEntry& entry, const TableCacheSettings& 
   };
   std::vector<Item> items;
   uintmax_t total = 0;
-  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
-    if (it->path().extension() != kTableCacheExtension) continue;
-    std::error_code e2;
-    const uintmax_t sz = it->file_size(e2);
-    const fs::file_time_type tm = it->last_write_time(e2);
-    if (e2) continue;
-    items.push_back({it->path(), tm, sz});
-    total += sz;
+  try {
+    for_each_entry(dir.string(), [&](const fs::path& p, uint64_t size, fs::file_time_type time) {
+      items.push_back({p, time, size});
+      total += size;
+    });
+  } catch (const std::runtime_error& e) {
+    note = std::string("class-table cache folder ") + e.what() + "; not trimmed";
+    return;
   }
   if (total <= settings.max_bytes) return;
   std::sort(items.begin(), items.end(), [&](const Item& a, const Item& b) {

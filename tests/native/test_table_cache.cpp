@@ -311,10 +311,19 @@ TEST(TableCache, TheFolderIsTrimmedLeastRecentlyUsedFirst) {
   EXPECT_TRUE(fs::exists(a));
   EXPECT_FALSE(fs::exists(b));
   EXPECT_TRUE(fs::exists(c));
-  // Files that are not entries are not the cache's to remove.
+  // Files that are not entries are not the cache's to remove, but for the
+  // temporaries of writes stopped before their rename once they are an
+  // hour old (a running write's is younger).
   write_bytes(dir / "notes.txt", std::vector<char>(size_t(3 * one), 'n'));
+  const fs::path stale = dir / "0123456789abcdef.knittable.tmp.123.0";
+  const fs::path young = dir / "0123456789abcdef.knittable.tmp.124.0";
+  write_bytes(stale, {'x'});
+  write_bytes(young, {'y'});
+  fs::last_write_time(stale, now - std::chrono::hours(2));
   const std::string d = material("K\n", {Rgb{0.3f, 0.3f, 0.3f}}).table_cache_file();
   EXPECT_TRUE(fs::exists(dir / "notes.txt"));
+  EXPECT_FALSE(fs::exists(stale));
+  EXPECT_TRUE(fs::exists(young));
   EXPECT_TRUE(fs::exists(d));
   EXPECT_FALSE(fs::exists(a));  // now the oldest
   EXPECT_TRUE(fs::exists(c));
