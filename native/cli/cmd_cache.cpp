@@ -16,7 +16,8 @@ const char* kHelp = R"(usage: knitshade cache [--dir DIR] [--clear]
 The class-table cache of `knitshade render` (docs/renderer.md): multi-scale
 materials keep their class tables there between runs. Prints the folder, how
 many entries it holds and their size; --clear removes the entries (its
-*.knittable files, nothing else).
+*.knittable files, and temporaries of interrupted writes over an hour old;
+nothing else).
 
 options:
   --dir DIR   the folder (default: as `knitshade render` picks it:
