@@ -161,15 +161,6 @@ static_assert(sizeof(YarnBsdfParams) == 8 * sizeof(float) + 2 * sizeof(std::vect
               "YarnBsdfParams changed: update the key");
 static_assert(sizeof(Rgb) == 3 * sizeof(float), "Rgb changed: update the key");
 
-void put_colours(Writer& w, const std::vector<Rgb>& cs) {
-  w.put(uint64_t(cs.size()));
-  for (const Rgb& c : cs) {
-    w.put(c.r);
-    w.put(c.g);
-    w.put(c.b);
-  }
-}
-
 void put_key(Writer& w, const KnitMaterial& m, const ClassTableBuild& b) {
   w.put_string("knitshade class table, format 1");
   w.put_string(library_build_id());
@@ -178,8 +169,11 @@ void put_key(Writer& w, const KnitMaterial& m, const ClassTableBuild& b) {
   const Pattern& pat = s.pattern();
   w.put(int32_t(pat.rows()));
   w.put(int32_t(pat.cols()));
-  w.put_vector(pat.codes());
-  w.put_vector(pat.colors_or_zero());
+  // (a byte per cell for each: codes are 0..3 and colour indices below
+  // Pattern::kMaxColors = 256, both checked when the pattern is made)
+  static_assert(Pattern::kMaxColors <= 256, "colour indices no longer fit a byte: update the key");
+  w.put_vector(std::vector<uint8_t>(pat.codes().begin(), pat.codes().end()));
+  w.put_vector(std::vector<uint8_t>(pat.colors_or_zero().begin(), pat.colors_or_zero().end()));
   const KnitMaterialParams& p = m.params();
   w.put(p.stitch.a);
   w.put(p.stitch.h);
@@ -189,8 +183,8 @@ void put_key(Writer& w, const KnitMaterial& m, const ClassTableBuild& b) {
   for (float v : {y.roughness_x, y.roughness_y, y.trans_roughness_x, y.trans_roughness_y, y.eta, y.body_energy,
                   y.body_reflect, y.optical_depth})
     w.put(v);
-  put_colours(w, y.reflect_colors);
-  put_colours(w, y.transmit_colors);
+  w.put_vector(y.reflect_colors);
+  w.put_vector(y.transmit_colors);
   w.put(int32_t(p.ply.ply_count));
   w.put(p.ply.ply_radius);
   w.put(p.ply.ply_twist);
