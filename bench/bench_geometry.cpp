@@ -8,13 +8,18 @@
 // setup against the double-precision explicit-tube ray caster).
 #include <benchmark/benchmark.h>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "knit/shading.h"
 #include "knit/surface.h"
+#include "knit/table_cache.h"
 #include "knit/yarns.h"
 #include "../tests/support/groundtruth.h"
 #include "../tests/support/test_patterns.h"
@@ -272,6 +277,39 @@ void BM_Aggregate(benchmark::State& state) {
   state.SetLabel(state.range(1) == 1 ? "half-stitch footprint" : "4-stitch footprint");
 }
 BENCHMARK(BM_Aggregate)->ArgsProduct({{4, 8, 16, 32}, {1, 8}});
+
+// A multi-scale material's construction, which builds its class table and
+// tabulated BSDF (arg 0), or reads them from the class-table cache (arg 1;
+// knit/table_cache.h): the seed stitch, two classes. Every hardware thread
+// builds; the read is one thread's. Run both in one go for their ratio:
+// --benchmark_filter=BM_ClassTables
+void BM_ClassTables(benchmark::State& state) {
+  namespace fs = std::filesystem;
+  const bool cached = state.range(0) == 1;
+  const fs::path dir = fs::temp_directory_path() / ("knitshade-bench-cache-" + std::to_string(long(getpid())));
+  KnitMaterialParams mp;
+  mp.mode = KnitMode::MultiScale;
+  const Pattern seed = test::seed();
+  if (cached) {
+    set_table_cache({dir.string()});
+    const KnitMaterial warm(seed, mp);  // (writes the entry)
+  }
+  double seconds = 0;
+  bool all_cached = true;
+  for (auto _ : state) {
+    const KnitMaterial m(seed, mp);
+    seconds += m.table_seconds();
+    all_cached = all_cached && m.table_from_cache() == cached;
+    benchmark::DoNotOptimize(m.footprint_table());
+  }
+  set_table_cache({});
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+  if (!all_cached) state.SkipWithError(cached ? "an entry was not read from the cache" : "a table came from a cache");
+  state.counters["table_ms"] = 1e3 * seconds / double(state.iterations());
+  state.SetLabel(cached ? "read from the class-table cache" : "built");
+}
+BENCHMARK(BM_ClassTables)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 
