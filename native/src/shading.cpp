@@ -118,7 +118,6 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
     if (!table_from_cache_) {
       table_ = std::make_shared<const FootprintTable>(surface_, params_.capm_options, build.rays_per_direction,
                                                       FootprintTable::LayerCounts::Auto, build.sub_cells);
-      table_bsdf_.reset();
       if (build.table_bsdf)
         table_bsdf_ = std::make_shared<const TableBsdf>(*this, *table_, build.hits_per_view, build.march_stride);
       std::string store_note;

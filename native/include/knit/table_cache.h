@@ -46,8 +46,8 @@ inline constexpr const char* kTableCacheExtension = ".knittable";
 // The entries in folder `dir` (none when it does not exist), and
 // clear_table_cache: removes them (the *.knittable files, nothing else) and
 // says what it removed. Both also remove the temporaries of interrupted
-// writes once they are an hour old. Both throw std::runtime_error naming the folder
-// when it cannot be read, or an entry that cannot be removed.
+// writes once they are an hour old, and throw std::runtime_error naming the
+// folder when it cannot be read, or an entry that cannot be removed.
 struct TableCacheUsage {
   uint64_t entries = 0, bytes = 0;
 };
