@@ -12,13 +12,20 @@ summary) to OUT_DIR.
                   its own reference is interpolated (log-log) on the ladder,
                   and, less noisy, the samples it needs (interpolated the
                   same way; seeded errors are deterministic) times the cost
-                  of a sample pass timed on its reference render.
+                  of a sample pass timed on its reference render. Both
+                  count sample passes only; the ratios with each
+                  method's set-up added (parsing, meshes, the class
+                  tables or the explicit yarns and their BVH) are given
+                  beside them, cold (a first render: the class tables
+                  built) and warm (a later one: read from the class-table
+                  cache, a folder of the run's own under OUT_DIR).
   memory          the model's state (KnitMaterial::state_bytes) and the
                   renderer's per-mesh tables, against the explicit yarns'
                   geometry, shading data and Embree BVH.
   overhead        the knit model against a plain diffuse material of the same
                   colour on the same mesh and lights, same samples (64),
-                  rendered in turn three times: the ratio of the fastest.
+                  rendered in turn three times: the ratio of the fastest,
+                  and the same with set-up, cold and warm.
   instructions    (not in the default set) the same pairs at the same size
                   (so the same footprints) and 2 spp on one thread, counted
                   in instructions of the render loop by callgrind (Debian's
@@ -76,6 +83,8 @@ class Bench:
         self.out = out
         self.quick = quick
         os.makedirs(out, exist_ok=True)
+        self.cache_root = os.path.join(out, "table-cache")
+        shutil.rmtree(self.cache_root, ignore_errors=True)
         self.results = {"machine": os.uname().nodename, "cpus": os.cpu_count(), "started": time.ctime()}
 
     def scene_file(self, tag, scene):
@@ -85,12 +94,15 @@ class Bench:
             json.dump(scene, f, indent=1)
         return path
 
-    def render(self, tag, scene, spp, seed=1, explicit=False):
+    def render(self, tag, scene, spp, seed=1, explicit=False, cache=None):
+        """Renders the scene; returns the image's path and the report. The class-table cache is a folder
+        of this run's own per `cache` (default: the tag), empty when the run starts, so the first render
+        of a method builds its tables (the cold set-up) and the later ones read them (the warm one)."""
         path = self.scene_file(tag, scene)
         img = os.path.join(self.out, f"{tag}_{spp}_{seed}.exr")
         rep = os.path.join(self.out, f"{tag}_{spp}_{seed}.report.json")
         cmd = [self.cli, "render", path, "-o", img, "--spp", str(spp), "--seed", str(seed), "--quiet",
-               "--report", rep]
+               "--report", rep, "--cache-dir", os.path.join(self.cache_root, cache or tag)]
         if explicit:
             cmd.append("--explicit-yarns")
         subprocess.run(cmd, check=True)
@@ -116,16 +128,17 @@ class Bench:
         if not hasattr(self, "_renders"):
             self._renders, self._conv = {}, {}
         if tag not in self._renders:
-            ref, ref_rep = self.render(tag + "_ref", scene, ref_spp, seed=1000, explicit=explicit)
-            imgs = []
+            ref, ref_rep = self.render(tag + "_ref", scene, ref_spp, seed=1000, explicit=explicit, cache=tag)
+            imgs, setups = [], [setup_seconds(ref_rep)]
             for spp in ladder:
-                img, rep = self.render(tag, scene, spp, seed=1, explicit=explicit)
+                img, rep = self.render(tag, scene, spp, seed=1, explicit=explicit, cache=tag)
                 imgs.append((spp, img, rep["seconds"]["render"]))
-            self._renders[tag] = (ref, ref_rep, imgs)
+                setups.append(setup_seconds(rep))
+            self._renders[tag] = (ref, ref_rep, imgs, setups)
         key = (tag, mask)
         if key in self._conv:
             return self._conv[key]
-        ref, ref_rep, imgs = self._renders[tag]
+        ref, ref_rep, imgs, setups = self._renders[tag]
         points = []
         for spp, img, seconds in imgs:
             c = self.compare(img, ref, mask)
@@ -137,9 +150,13 @@ class Bench:
         ref_noise = e1 / math.sqrt(ref_spp)
         for p in points:
             p["rmse_corrected"] = math.sqrt(max(p["rmse"] ** 2 - ref_noise ** 2, 1e-30))
+        # Set-up (everything before the first sample: parsing, meshes, the class tables or the explicit
+        # yarns and their BVH): cold is the reference's, the first render of the method, which builds the
+        # class tables; warm the least of the ladder's, which read them from the cache.
         self._conv[key] = {"reference": ref, "reference_spp": ref_spp,
                            "reference_seconds": ref_rep["seconds"]["render"], "reference_noise": ref_noise,
-                           "points": points, "report": ref_rep}
+                           "points": points, "report": ref_rep,
+                           "setup_cold": setups[0], "setup_warm": min(setups[1:])}
         return self._conv[key]
 
     @staticmethod
@@ -181,6 +198,14 @@ class Bench:
             res[label].update({"samples_to_target": spp, "seconds_per_pass": per_pass,
                                "seconds_by_passes": spp * per_pass})
         res["speedup_by_passes"] = res[label_b]["seconds_by_passes"] / res[label_a]["seconds_by_passes"]
+        # The same with each method's set-up added: a first render (cold: the class tables built) and a
+        # later one of the same material (warm: read from the class-table cache). Explicit yarns are
+        # built again for every render.
+        for label, conv in ((label_a, a), (label_b, b)):
+            res[label].update({"setup_cold": conv["setup_cold"], "setup_warm": conv["setup_warm"]})
+        for kind in ("cold", "warm"):
+            res["speedup_with_setup_" + kind] = ((tb + res[label_b]["setup_" + kind]) /
+                                                 (ta + res[label_a]["setup_" + kind]))
         ma, mb = a["report"]["memory_bytes"], b["report"]["memory_bytes"]
         res["memory"] = {label_a: ma, label_b: mb}
         res["knit"] = {label_a: a["report"]["knit"], label_b: b["report"]["knit"]}
@@ -193,7 +218,9 @@ class Bench:
               f"{res[label_a]['samples_to_target']:.1f} spp x {1e3 * res[label_a]['seconds_per_pass']:.2f} ms, "
               f"{label_b} {res[label_b]['samples_to_target']:.1f} spp x "
               f"{1e3 * res[label_b]['seconds_per_pass']:.2f} ms, {label_b}/{label_a} = "
-              f"{res['speedup_by_passes']:.2f}", flush=True)
+              f"{res['speedup_by_passes']:.2f}; with set-up, cold {res['speedup_with_setup_cold']:.2f} "
+              f"({label_a} {res[label_a]['setup_cold']:.2f} s, {label_b} {res[label_b]['setup_cold']:.2f} s), "
+              f"warm {res['speedup_with_setup_warm']:.2f}", flush=True)
         return res
 
     def overhead(self, name, scene, spp, repeats=3):
@@ -202,18 +229,28 @@ class Bench:
         images); the ratio is of the fastest of each, the least disturbed by the rest of the machine."""
         print(f"overhead: {name}", flush=True)
         diffuse = diffuse_twin(scene)
-        tk, td = [], []
+        tk, td, sk, sd = [], [], [], []
         for _ in range(max(1, repeats)):
             _, rk = self.render(name + "_knit", scene, spp)
             _, rd = self.render(name + "_diffuse", diffuse, spp)
             tk.append(rk["seconds"]["render"])
             td.append(rd["seconds"]["render"])
+            sk.append(setup_seconds(rk))
+            sd.append(setup_seconds(rd))
         res = {"spp": spp, "knit_seconds": min(tk), "diffuse_seconds": min(td), "ratio": min(tk) / min(td),
                "knit_seconds_all": tk, "diffuse_seconds_all": td,
                "ratio_of_medians": sorted(tk)[len(tk) // 2] / sorted(td)[len(td) // 2],
-               "knit_rays": rk["rays"]["total"], "diffuse_rays": rd["rays"]["total"], "knit": rk["knit"]}
+               "knit_rays": rk["rays"]["total"], "diffuse_rays": rd["rays"]["total"], "knit": rk["knit"],
+               # Whole renders, set-up included: the first knit render builds its class tables (cold),
+               # the later ones read them from the cache (warm).
+               "knit_setup_all": sk, "diffuse_setup_all": sd,
+               "ratio_with_setup_cold": (min(tk) + sk[0]) / (min(td) + min(sd))}
+        if len(sk) > 1:
+            res["ratio_with_setup_warm"] = (min(tk) + min(sk[1:])) / (min(td) + min(sd))
         print(f"  -> knit {res['knit_seconds']:.2f} s, diffuse {res['diffuse_seconds']:.2f} s (fastest of "
-              f"{len(tk)}), ratio {res['ratio']:.2f} (of medians {res['ratio_of_medians']:.2f})", flush=True)
+              f"{len(tk)}), ratio {res['ratio']:.2f} (of medians {res['ratio_of_medians']:.2f}); with set-up, "
+              f"cold {res['ratio_with_setup_cold']:.2f} (knit {sk[0]:.2f} s, diffuse {min(sd):.2f} s)"
+              + (f", warm {res['ratio_with_setup_warm']:.2f}" if len(sk) > 1 else ""), flush=True)
         return res
 
     # The render loop's lambda in knit::render::render_image: callgrind counts from its entry only, so
@@ -245,6 +282,12 @@ class Bench:
         print(f"  -> knit {counts['knit'] / 1e6:.0f} M, diffuse {counts['diffuse'] / 1e6:.0f} M instructions, "
               f"ratio {res['ratio']:.2f}", flush=True)
         return res
+
+
+def setup_seconds(report):
+    """A render's time before its first sample: all of it but the sample passes and the image's output."""
+    sec = report["seconds"]
+    return sec["total"] - sec["render"] - sec["write"]
 
 
 def diffuse_twin(scene):
