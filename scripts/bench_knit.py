@@ -118,8 +118,8 @@ class Bench:
         """Coverage mask of object `obj` (knitshade render --mask-object), for errors over the fabric alone."""
         path = self.scene_file(tag, scene)
         img = os.path.join(self.out, tag + "_mask.exr")
-        subprocess.run([self.cli, "render", path, "-o", img, "--spp", "64", "--quiet", "--mask-object", obj],
-                       check=True)
+        subprocess.run([self.cli, "render", path, "-o", img, "--spp", "64", "--quiet", "--mask-object", obj,
+                        "--cache-dir", os.path.join(self.cache_root, tag)], check=True)
         return img
 
     def convergence(self, tag, scene, ladder, ref_spp, explicit=False, mask=None):
@@ -269,7 +269,7 @@ class Bench:
             cmd = ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
                    "--toggle-collect=" + self.RENDER_LOOP, self.cli, "render", path, "-o",
                    os.path.join(self.out, f"{name}_{label}_instr.exr"), "--spp", str(spp), "--threads", "1",
-                   "--quiet"]
+                   "--quiet", "--cache-dir", os.path.join(self.cache_root, f"{name}_{label}_instr")]
             r = subprocess.run(cmd, check=True, capture_output=True, text=True)
             found = [line for line in r.stderr.splitlines() if "Collected :" in line]
             n = int(found[-1].split(":")[-1]) if found else 0
