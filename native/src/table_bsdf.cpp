@@ -82,6 +82,23 @@ float sampling_value(const TableBsdf::Mix& m, const F4& v) {
   return m.sw[0] * v[0] + m.sw[1] * v[1] + m.sw[2] * v[2] + m.sw[3] * v[3];
 }
 
+// The heaviest of a direction's four bilinear corners (the first of equal
+// ones): the node whose cell holds the direction, for sample()'s density.
+int heaviest_corner(const SphereNodes& c) { return int(std::max_element(c.w.begin(), c.w.end()) - c.w.begin()); }
+
+// sample()'s density in the cell of a node whose mixed sampling value is
+// `value` (the mix's total, m.rows[kTheta], > 0).
+float density_from(const TableBsdf::Mix& m, float value) {
+  constexpr float kUniformPdf = TableBsdf::kUniform / (4 * kPi);
+  return (1 - TableBsdf::kUniform) * value / m.rows[TableBsdf::kTheta] + kUniformPdf;
+}
+
+// The same from the node's mixed values before sampling_value, for any mix.
+float density_at(const TableBsdf::Mix& m, const F4& node_sum) {
+  if (!(m.rows[TableBsdf::kTheta] > 0)) return 1 / (4 * kPi);
+  return density_from(m, sampling_value(m, node_sum));
+}
+
 // A 32-bit integer hash (the finaliser of MurmurHash3): every input bit
 // reaches every output bit.
 uint32_t hash32(uint32_t h) {
@@ -502,6 +519,11 @@ Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total, f
   // nodes lie side by side. One sum per light node: four chains of
   // additions side by side, not one four times as long.
   F4 lit0{}, lit1{}, lit2{}, lit3{}, all0{}, all1{}, all2{}, all3{};
+  // The density's node (the heaviest corner) is one of the four read here:
+  // its mixed value is summed on the way, term by term as node_value sums
+  // it, so the density is the same to the bit without reading it again.
+  const int q = heaviest_corner(c);
+  F4 nq{};
   if (folded_) {
     // The folded values: the channels themselves, nothing shadowed.
     for (int t = 0; t < m.n; ++t) {
@@ -509,16 +531,19 @@ Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total, f
       const uint16_t *p0 = at(v, c.node[0]), *p1 = at(v, c.node[1]), *p2 = at(v, c.node[2]), *p3 = at(v, c.node[3]);
       for (int s = 0; s < slots_; ++s) {
         const float ws = m.w[size_t(t)] * m.share[size_t(s)];
-        lit0 += (ws * c.w[0]) * bf16x4(p0 + kValues * s);
-        lit1 += (ws * c.w[1]) * bf16x4(p1 + kValues * s);
-        lit2 += (ws * c.w[2]) * bf16x4(p2 + kValues * s);
-        lit3 += (ws * c.w[3]) * bf16x4(p3 + kValues * s);
+        const F4 v0 = bf16x4(p0 + kValues * s), v1 = bf16x4(p1 + kValues * s), v2 = bf16x4(p2 + kValues * s),
+                 v3 = bf16x4(p3 + kValues * s);
+        lit0 += (ws * c.w[0]) * v0;
+        lit1 += (ws * c.w[1]) * v1;
+        lit2 += (ws * c.w[2]) * v2;
+        lit3 += (ws * c.w[3]) * v3;
+        nq += ws * (q == 0 ? v0 : q == 1 ? v1 : q == 2 ? v2 : v3);
       }
     }
     const F4 f = (lit0 + lit1) + (lit2 + lit3);
     const Vec3 r = k::kv3(f[0], f[1], f[2]);
     if (total) *total = r;
-    if (density_out) *density_out = density(m, c);
+    if (density_out) *density_out = density_at(m, nq);
     return r;
   }
   for (int t = 0; t < m.n; ++t) {
@@ -539,6 +564,7 @@ Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total, f
         all2 += w2 * v2;
         all3 += w3 * v3;
       }
+      nq += ws * (q == 0 ? v0 : q == 1 ? v1 : q == 2 ? v2 : v3);
     }
   }
   const F4 lit = (lit0 + lit1) + (lit2 + lit3);
@@ -548,7 +574,7 @@ Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total, f
                   v[0] + v[1] * kd_r.z + v[2] * kd_t.z);
   };
   if (total) *total = rgb(all);
-  if (density_out) *density_out = density(m, c);
+  if (density_out) *density_out = density_at(m, nq);
   return rgb(lit);
 }
 
@@ -563,11 +589,8 @@ float TableBsdf::node_value(const Mix& m, int l) const {
 float TableBsdf::pdf(const Mix& m, Vec3 wi) const { return density(m, sphere_nodes(wi, kTheta, kPhi)); }
 
 float TableBsdf::density(const Mix& m, const SphereNodes& c) const {
-  constexpr float kUniformPdf = kUniform / (4 * kPi);
-  const float total = m.rows[kTheta];
-  if (!(total > 0)) return 1 / (4 * kPi);
-  const int q = int(std::max_element(c.w.begin(), c.w.end()) - c.w.begin());
-  return (1 - kUniform) * node_value(m, c.node[size_t(q)]) / total + kUniformPdf;
+  if (!(m.rows[kTheta] > 0)) return 1 / (4 * kPi);
+  return density_from(m, node_value(m, c.node[size_t(heaviest_corner(c))]));
 }
 
 bool TableBsdf::sample(const Mix& m, float u0, float u1, float u2, Vec3& wi, float* pdf_out, float* u_rest) const {
