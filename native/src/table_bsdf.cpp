@@ -34,8 +34,7 @@ float from_bf16(uint16_t v) {
 // Four floats as one vector (GCC and Clang vector extensions): the table's
 // sums run four lanes at a time.
 typedef float F4 __attribute__((vector_size(16)));
-typedef uint16_t U4 __attribute__((vector_size(8)));
-typedef uint32_t W4 __attribute__((vector_size(16)));
+typedef uint16_t H8 __attribute__((vector_size(16)));
 
 F4 load4(const float* p) {
   F4 v;
@@ -43,11 +42,16 @@ F4 load4(const float* p) {
   return v;
 }
 
-// Four stored bfloat16 values as floats.
+// Four stored bfloat16 values as floats: each value's 16 bits become the
+// upper half of a float's, the lower half zero. Written as one interleave
+// of the values with zeros, a single unpack on x86 (the widening
+// conversion and shift it replaced took a second load and four more
+// operations with SSE2); the same bits either way.
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "bf16x4 puts each value in the upper half of a float's bits");
 F4 bf16x4(const uint16_t* p) {
-  U4 h;
-  std::memcpy(&h, p, sizeof h);
-  const W4 bits = __builtin_convertvector(h, W4) << 16;
+  H8 h{};
+  std::memcpy(&h, p, 4 * sizeof(uint16_t));
+  const H8 bits = __builtin_shufflevector(H8{}, h, 0, 8, 1, 9, 2, 10, 3, 11);
   F4 f;
   std::memcpy(&f, &bits, sizeof f);
   return f;
