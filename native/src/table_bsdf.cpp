@@ -91,16 +91,12 @@ float sampling_value(const TableBsdf::Mix& m, const F4& v) {
 int heaviest_corner(const SphereNodes& c) { return int(std::max_element(c.w.begin(), c.w.end()) - c.w.begin()); }
 
 // sample()'s density in the cell of a node whose mixed sampling value is
-// `value` (the mix's total, m.rows[kTheta], > 0).
+// `value`: uniform over the sphere for a mix whose total is not positive.
 float density_from(const TableBsdf::Mix& m, float value) {
   constexpr float kUniformPdf = TableBsdf::kUniform / (4 * kPi);
-  return (1 - TableBsdf::kUniform) * value / m.rows[TableBsdf::kTheta] + kUniformPdf;
-}
-
-// The same from the node's mixed values before sampling_value, for any mix.
-float density_at(const TableBsdf::Mix& m, const F4& node_sum) {
-  if (!(m.rows[TableBsdf::kTheta] > 0)) return 1 / (4 * kPi);
-  return density_from(m, sampling_value(m, node_sum));
+  const float total = m.rows[TableBsdf::kTheta];
+  if (!(total > 0)) return 1 / (4 * kPi);
+  return (1 - TableBsdf::kUniform) * value / total + kUniformPdf;
 }
 
 // A 32-bit integer hash (the finaliser of MurmurHash3): every input bit
@@ -547,7 +543,7 @@ Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total, f
     const F4 f = (lit0 + lit1) + (lit2 + lit3);
     const Vec3 r = k::kv3(f[0], f[1], f[2]);
     if (total) *total = r;
-    if (density_out) *density_out = density_at(m, nq);
+    if (density_out) *density_out = density_from(m, sampling_value(m, nq));
     return r;
   }
   for (int t = 0; t < m.n; ++t) {
@@ -578,7 +574,7 @@ Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total, f
                   v[0] + v[1] * kd_r.z + v[2] * kd_t.z);
   };
   if (total) *total = rgb(all);
-  if (density_out) *density_out = density_at(m, nq);
+  if (density_out) *density_out = density_from(m, sampling_value(m, nq));
   return rgb(lit);
 }
 
@@ -593,7 +589,6 @@ float TableBsdf::node_value(const Mix& m, int l) const {
 float TableBsdf::pdf(const Mix& m, Vec3 wi) const { return density(m, sphere_nodes(wi, kTheta, kPhi)); }
 
 float TableBsdf::density(const Mix& m, const SphereNodes& c) const {
-  if (!(m.rows[kTheta] > 0)) return 1 / (4 * kPi);
   return density_from(m, node_value(m, c.node[size_t(heaviest_corner(c))]));
 }
 
