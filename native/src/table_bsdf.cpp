@@ -90,6 +90,11 @@ float sampling_value(const TableBsdf::Mix& m, const F4& v) {
 // ones): the node whose cell holds the direction, for sample()'s density.
 int heaviest_corner(const SphereNodes& c) { return int(std::max_element(c.w.begin(), c.w.end()) - c.w.begin()); }
 
+// Corner q's values among the four that eval has read.
+const F4& corner_value(int q, const F4& v0, const F4& v1, const F4& v2, const F4& v3) {
+  return q == 0 ? v0 : q == 1 ? v1 : q == 2 ? v2 : v3;
+}
+
 // sample()'s density in the cell of a node whose mixed sampling value is
 // `value`: uniform over the sphere for a mix whose total is not positive.
 float density_from(const TableBsdf::Mix& m, float value) {
@@ -537,7 +542,7 @@ Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total, f
         lit1 += (ws * c.w[1]) * v1;
         lit2 += (ws * c.w[2]) * v2;
         lit3 += (ws * c.w[3]) * v3;
-        nq += ws * (q == 0 ? v0 : q == 1 ? v1 : q == 2 ? v2 : v3);
+        nq += ws * corner_value(q, v0, v1, v2, v3);
       }
     }
     const F4 f = (lit0 + lit1) + (lit2 + lit3);
@@ -564,7 +569,7 @@ Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total, f
         all2 += w2 * v2;
         all3 += w3 * v3;
       }
-      nq += ws * (q == 0 ? v0 : q == 1 ? v1 : q == 2 ? v2 : v3);
+      nq += ws * corner_value(q, v0, v1, v2, v3);
     }
   }
   const F4 lit = (lit0 + lit1) + (lit2 + lit3);

@@ -106,8 +106,9 @@ TEST(TableBsdf, NodesHoldTheNearFieldShadingOfTheirClass) {
                   "Bt %.5f (reference, lit: %.5f, %.5f, %.5f); red %.5f against %.5f (%+.3f)\n",
                   slot, view, light, stored[3], ref_share, stored[0], stored[1], stored[2], ref[0], ref[1], ref[2],
                   got.x, want, got.x / want - 1);
-      share_sum += std::fabs(double(stored[3]) - ref_share);
-      share_worst = std::max(share_worst, std::fabs(double(stored[3]) - ref_share));
+      const double share_err = std::fabs(double(stored[3]) - ref_share);
+      share_sum += share_err;
+      share_worst = std::max(share_worst, share_err);
       worst = std::max(worst, err);
       sum += err;
       ++n;
