@@ -1168,6 +1168,11 @@ max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
           "table_from_cache", &KnitMaterial::table_from_cache,
           "Whether the class table came from the class-table cache (knitshade.set_table_cache).")
       .def_property_readonly(
+          "table_marches_from_cache", &KnitMaterial::table_marches_from_cache,
+          "Whether the class table was finished from marches found in the class-table cache: "
+          "the cache held this material with other colours (or table_fold), and only the "
+          "colours were applied, not the marches run again.")
+      .def_property_readonly(
           "table_cache_note", &KnitMaterial::table_cache_note,
           "What went wrong with the class-table cache, if anything (a damaged entry, a "
           "folder that cannot be written); the table was then built as without it.")

@@ -114,7 +114,9 @@ RenderJobResult run_render_job(const RenderJob& job, const std::function<void(co
   for (const MaterialDesc& m : desc.materials)
     if (m.type == MaterialType::Knit && m.knit.model && m.knit.model->footprint_table()) {
       rep.knit_table_seconds += m.knit.model->table_seconds();
-      ++(m.knit.model->table_from_cache() ? rep.knit_tables_cached : rep.knit_tables_built);
+      ++(m.knit.model->table_from_cache()           ? rep.knit_tables_cached
+         : m.knit.model->table_marches_from_cache() ? rep.knit_tables_finished
+                                                    : rep.knit_tables_built);
     }
   rep.parse_seconds = std::max(0.0, parse_seconds - rep.knit_table_seconds);
   rep.load_seconds = scene.stats().load_seconds;

@@ -43,13 +43,17 @@ std::string RenderReport::to_text() const {
   // The knit class tables are built while the scene is parsed; parse_seconds
   // leaves them out, so the parts still add up to the wall time.
   // Explicit yarns: sweeping the tubes and building their BVH.
-  char tables[96] = "", yarns[64] = "";
-  const int ntables = knit_tables_built + knit_tables_cached;
+  char tables[128] = "", yarns[64] = "";
+  const int ntables = knit_tables_built + knit_tables_cached + knit_tables_finished;
   if (ntables > 0 && knit_tables_cached == ntables)
     std::snprintf(tables, sizeof tables, "knit class tables %.2f from the cache, ", knit_table_seconds);
-  else if (knit_tables_cached > 0)
-    std::snprintf(tables, sizeof tables, "knit class tables %.2f (%d of %d from the cache), ", knit_table_seconds,
-                  knit_tables_cached, ntables);
+  else if (ntables > 0 && knit_tables_finished == ntables)
+    std::snprintf(tables, sizeof tables, "knit class tables %.2f finished from the cached marches, ",
+                  knit_table_seconds);
+  else if (knit_tables_cached > 0 || knit_tables_finished > 0)
+    std::snprintf(tables, sizeof tables,
+                  "knit class tables %.2f (%d of %d from the cache, %d finished from its marches), ",
+                  knit_table_seconds, knit_tables_cached, ntables, knit_tables_finished);
   else if (ntables > 0 || knit_table_seconds > 0)
     std::snprintf(tables, sizeof tables, "knit class tables %.2f, ", knit_table_seconds);
   if (explicit_yarns) std::snprintf(yarns, sizeof yarns, "yarns %.2f, ", yarn_build_seconds);
@@ -135,7 +139,9 @@ std::string RenderReport::to_json() const {
   j["seconds"] = {{"parse", parse_seconds}, {"knit_tables", knit_table_seconds}, {"load", load_seconds},
                   {"yarns", yarn_build_seconds}, {"build", build_seconds},
                   {"render", render_seconds}, {"write", write_seconds}, {"total", total_seconds}};
-  j["knit_tables"] = {{"built", knit_tables_built}, {"from_cache", knit_tables_cached}};
+  j["knit_tables"] = {{"built", knit_tables_built},
+                      {"from_cache", knit_tables_cached},
+                      {"finished_from_cached_marches", knit_tables_finished}};
   j["samples"] = samples;
   j["samples_per_second"] = samples_per_second();
   j["rays"] = {{"camera", camera_rays}, {"bounce", bounce_rays}, {"shadow", shadow_rays}, {"total", total_rays()}};

@@ -15,8 +15,10 @@ struct RenderReport {
   // table builds (multi-scale), which happen while the scene is parsed.
   double parse_seconds = 0, knit_table_seconds = 0, load_seconds = 0, build_seconds = 0, render_seconds = 0,
          write_seconds = 0, total_seconds = 0;
-  // Knit materials with a class table: built here, or read from the class-table cache.
-  int knit_tables_built = 0, knit_tables_cached = 0;
+  // Knit materials with a class table: built here, read from the class-table
+  // cache, or finished here from the cache's marches (a material cached with
+  // other colours: KnitMaterial::table_marches_from_cache).
+  int knit_tables_built = 0, knit_tables_cached = 0, knit_tables_finished = 0;
   uint64_t samples = 0;
   uint64_t camera_rays = 0, bounce_rays = 0, shadow_rays = 0;
   uint64_t invalid_samples = 0, pass_limit = 0;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "knit/yarns.h"
 #include "table_cache_internal.h"
@@ -111,19 +112,53 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
     build.sub_cells = params_.table_min_cells < 1;
     build.table_bsdf = params_.table_bsdf;
     const TableCacheSettings cache = table_cache();
-    const ClassTableEntry entry = class_table_entry(*this, build, cache);
-    table_cache_file_ = entry.path;
-    table_from_cache_ = load_class_tables(entry, build, surface_.pattern().rows(), surface_.pattern().cols(),
-                                          table_, table_bsdf_, table_cache_note_);
-    if (!table_from_cache_) {
+    const int rows = surface_.pattern().rows(), cols = surface_.pattern().cols();
+    // The finished tables, else their marches (the tables but for their
+    // colours, table_bsdf.h) finished here, else both built; what was built
+    // or finished is stored. Notes: the entries found damaged, then what was
+    // done instead; then the stores that failed.
+    std::vector<std::string> damaged, stores;
+    const auto load = [&](const ClassTableEntry& e, std::shared_ptr<const TableBsdf>& bsdf) {
+      std::string note;
+      const bool ok = load_class_tables(e, build, rows, cols, table_, bsdf, note);
+      if (!note.empty()) damaged.push_back(note);
+      return ok;
+    };
+    const auto store = [&](const ClassTableEntry& e, const TableBsdf* bsdf) {
+      std::string note;
+      store_class_tables(e, cache, *table_, bsdf, note);
+      if (!note.empty() && std::find(stores.begin(), stores.end(), note) == stores.end()) stores.push_back(note);
+    };
+    const auto build_table = [&] {
       table_ = std::make_shared<const FootprintTable>(surface_, params_.capm_options, build.rays_per_direction,
                                                       FootprintTable::LayerCounts::Auto, build.sub_cells);
-      if (build.table_bsdf)
-        table_bsdf_ = std::make_shared<const TableBsdf>(*this, *table_, build.hits_per_view, build.march_stride);
-      std::string store_note;
-      store_class_tables(entry, cache, *table_, table_bsdf_.get(), store_note);
-      if (!store_note.empty()) table_cache_note_ += (table_cache_note_.empty() ? "" : "; ") + store_note;
+    };
+    const ClassTableEntry done = class_table_entry(*this, build, cache, TableBsdf::Stage::Finished);
+    table_cache_file_ = done.path;
+    table_from_cache_ = load(done, table_bsdf_);
+    if (!table_from_cache_) {
+      if (build.table_bsdf) {
+        const ClassTableEntry marches = class_table_entry(*this, build, cache, TableBsdf::Stage::Marched);
+        std::shared_ptr<const TableBsdf> marched;
+        table_marches_from_cache_ = load(marches, marched);
+        if (!table_marches_from_cache_) {
+          build_table();
+          marched = std::make_shared<const TableBsdf>(*this, *table_, build.hits_per_view, build.march_stride,
+                                                      TableBsdf::Stage::Marched);
+          store(marches, marched.get());
+        }
+        table_bsdf_ = std::make_shared<const TableBsdf>(marched->finished(*this, *table_));
+      } else {
+        build_table();
+      }
+      store(done, table_bsdf_.get());
     }
+    std::string notes;
+    for (const std::string& n : damaged) notes += (notes.empty() ? "" : "; ") + n;
+    if (!damaged.empty())
+      notes += table_marches_from_cache_ ? "; finished the tables from the cached marches" : "; built the tables again";
+    for (const std::string& n : stores) notes += (notes.empty() ? "" : "; ") + n;
+    table_cache_note_ = notes;
     table_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
 }

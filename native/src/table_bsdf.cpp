@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 
 #include "knit/shading.h"
 
@@ -162,7 +163,7 @@ const ThetaCells kThetaCells;
 float TableBsdf::cell_solid_angle(int i) { return kThetaCells.omega[size_t(i)]; }
 
 TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, int hits_per_view,
-                     int march_stride) {
+                     int march_stride, Stage stage) {
   const auto t0 = std::chrono::steady_clock::now();
   const KnitSurface& surface = material.surface();
   const k::KnitGeom& g = surface.geom();
@@ -237,8 +238,24 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
     for (int slot = 0; slot < slots_; ++slot)
       hit_frac[size_t(slot) * kNodes + size_t(view)] = hit_frac[size_t(slot) * kNodes + size_t(view - view % kPhi)];
   }
+  hit_frac_ = std::move(hit_frac);
+  if (stage == Stage::Finished) finish(material, table);
+  seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+TableBsdf TableBsdf::finished(const KnitMaterial& material, const FootprintTable& table) const {
+  if (stage() != Stage::Marched) throw std::logic_error("TableBsdf::finished: the table is finished already");
+  const auto t0 = std::chrono::steady_clock::now();
+  TableBsdf t = *this;
+  t.finish(material, table);
+  t.seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return t;
+}
+
+void TableBsdf::finish(const KnitMaterial& material, const FootprintTable& table) {
   const int palette = table.one_colour() ? 1 : material.params().bsdf.num_colors();
   if (material.params().table_fold && classes_ * palette <= kMaxEntries) {
+    const FootprintTable::ClassCells cells = FootprintTable::class_cells(material.surface());
     std::vector<double> cell_share(size_t(slots_), 0.0);
     double cells_all = 0;
     for (int slot = 0; slot < slots_; ++slot) {
@@ -246,7 +263,7 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
       cells_all += cell_share[size_t(slot)];
     }
     for (double& c : cell_share) c /= std::max(cells_all, 1.0);
-    fold(material, palette, cell_share, hit_frac);
+    fold(material, palette, cell_share, hit_frac_);
   }
   rows_.assign(size_t(slots_) * kNodes * (kTheta + 1) * 4, 0.0f);
   const auto row_sums = [&](int view, int i, int slot) {
@@ -265,7 +282,6 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
         for (int c = 0; c < 4; ++c) total[c] += row_sums(view, i, slot)[c];
     }
   }
-  seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 namespace {

@@ -3,9 +3,15 @@
 // An entry is one file, <hash of the key>.knittable, in the cache folder:
 //
 //   "KNITTBL1"                      8 bytes
-//   key size (u64), key             everything the build reads (class_table_entry)
+//   key size (u64), key             everything the stage's build reads (class_table_entry)
 //   payload size (u64), payload     the FootprintTable, then a flag and the TableBsdf
 //   FNV-1a 64 of all bytes before   (u64)
+//
+// A material with a tabulated BSDF has two entries: its marches (the class
+// table and the TableBsdf's Marched stage, whose key leaves out the colours
+// and table_fold) and its finished tables (the key of the marches, the
+// colours and table_fold). Without a tabulated BSDF the class table holds
+// no colour and is the one entry, under the marches' key.
 //
 // in the machine's own byte order (the build id in the key pins the
 // machine's kind). Every size is checked against what is left of the file
@@ -18,6 +24,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -161,8 +168,17 @@ static_assert(sizeof(YarnBsdfParams) == 8 * sizeof(float) + 2 * sizeof(std::vect
               "YarnBsdfParams changed: update the key");
 static_assert(sizeof(Rgb) == 3 * sizeof(float), "Rgb changed: update the key");
 
-void put_key(Writer& w, const KnitMaterial& m, const ClassTableBuild& b) {
-  w.put_string("knitshade class table, format 1");
+// The parameters of the material that the build does not read, and so are
+// not in the key: uv_scale (the tables are in pattern space), footprint_points,
+// table_min_cells but for whether it asks for sub-cells (ClassTableBuild::
+// sub_cells), near_field_below_cell (how a render picks its route) and the
+// mode (the tables are built for multi-scale materials only); and in the
+// marches' key the colours and table_fold, which only finishing reads.
+// TableCache.TheTablesDoNotDependOnWhatTheKeyLeavesOut builds tables that
+// differ in each of them.
+void put_key(Writer& w, const KnitMaterial& m, const ClassTableBuild& b, TableBsdf::Stage stage) {
+  w.put_string("knitshade class table, format 2");
+  w.put_string(stage == TableBsdf::Stage::Marched ? "marches" : "finished");
   w.put_string(library_build_id());
   const KnitSurface& s = m.surface();
   w.put_string(KnitSurface::batch_isa_name(s.batch_isa(KnitSurface::BatchPath::Auto)));
@@ -183,21 +199,13 @@ void put_key(Writer& w, const KnitMaterial& m, const ClassTableBuild& b) {
   for (float v : {y.roughness_x, y.roughness_y, y.trans_roughness_x, y.trans_roughness_y, y.eta, y.body_energy,
                   y.body_reflect, y.optical_depth})
     w.put(v);
-  w.put_vector(y.reflect_colors);
-  w.put_vector(y.transmit_colors);
   w.put(int32_t(p.ply.ply_count));
   w.put(p.ply.ply_radius);
   w.put(p.ply.ply_twist);
   w.put(int32_t(p.ply.fiber_count));
   w.put(p.ply.fiber_twist);
   w.put(p.ply.yarn_radius);
-  for (bool v : {p.ply_detail, p.capm, p.footprint_table, p.table_bsdf, p.table_fold, p.self_shadowing,
-                 p.near_field_below_cell})
-    w.put(uint8_t(v));
-  w.put(int32_t(p.mode));
-  w.put(int32_t(p.footprint_points));
-  w.put(p.table_min_cells);
-  w.put(p.uv_scale);
+  for (bool v : {p.ply_detail, p.capm, p.footprint_table, p.table_bsdf, p.self_shadowing}) w.put(uint8_t(v));
   w.put(int32_t(p.capm_options.max_steps));
   w.put(p.capm_options.max_segment);
   w.put(p.capm_options.max_bend);
@@ -206,6 +214,10 @@ void put_key(Writer& w, const KnitMaterial& m, const ClassTableBuild& b) {
   w.put(uint8_t(b.table_bsdf));
   w.put(int32_t(b.hits_per_view));
   w.put(int32_t(b.march_stride));
+  if (stage == TableBsdf::Stage::Marched) return;
+  w.put(uint8_t(p.table_fold));
+  w.put_vector(y.reflect_colors);
+  w.put_vector(y.transmit_colors);
 }
 
 std::string hex64(uint64_t v) {
@@ -245,6 +257,7 @@ struct TableCacheCodec {
     io(t.folded_);
     io.vec(t.values_);
     io.vec(t.rows_);
+    io.vec(t.hit_frac_);
   }
   struct Put {
     Writer& w;
@@ -303,9 +316,14 @@ struct TableCacheCodec {
       return false;
     for (unsigned char c : t.class_of_)
       if (c >= FootprintTable::kClasses || t.slot_[c] < 0) return false;
-    return true;
+    // (no number that would reach an image as NaN or Inf; a bfloat16's
+    // exponent all ones is either)
+    return std::all_of(t.moments_.begin(), t.moments_.end(), [](float x) { return std::isfinite(x); }) &&
+           std::all_of(t.sub_moments_.begin(), t.sub_moments_.end(),
+                       [](uint16_t v) { return (v & 0x7f80u) != 0x7f80u; });
   }
-  static bool get(Reader& r, TableBsdf& t, int classes) {
+  // (and of the stage asked for: a marched table is neither folded nor has rows)
+  static bool get(Reader& r, TableBsdf& t, int classes, TableBsdf::Stage stage) {
     Get io{r};
     bsdf_fields(io, t);
     t.seconds_ = 0;  // (built elsewhere)
@@ -313,8 +331,19 @@ struct TableCacheCodec {
     if (!r.ok() || cls != classes || slots < 1 || slots > TableBsdf::kMaxEntries || colours < 1) return false;
     if (t.folded_ ? slots != cls * colours : (slots != cls || colours != 1)) return false;
     const size_t n = size_t(TableBsdf::kNodes);
-    return t.values_.size() == n * n * size_t(slots) * TableBsdf::kValues &&
-           t.rows_.size() == n * (TableBsdf::kTheta + 1) * size_t(slots) * 4;
+    const bool marched = stage == TableBsdf::Stage::Marched;
+    if (marched && t.folded_) return false;
+    // (the fold reads the hit fractions as weights: in [0, 1])
+    if (t.hit_frac_.size() != n * size_t(cls) ||
+        !std::all_of(t.hit_frac_.begin(), t.hit_frac_.end(), [](double v) { return v >= 0 && v <= 1; }))
+      return false;
+    if (t.values_.size() != n * n * size_t(slots) * TableBsdf::kValues ||
+        t.rows_.size() != (marched ? 0 : n * (TableBsdf::kTheta + 1) * size_t(slots) * 4))
+      return false;
+    // Values finite and >= 0, as the build stores them: a bfloat16's sign
+    // bit clear and its exponent not all ones.
+    return std::all_of(t.values_.begin(), t.values_.end(), [](uint16_t v) { return (v & 0xff80u) < 0x7f80u; }) &&
+           std::all_of(t.rows_.begin(), t.rows_.end(), [](float v) { return std::isfinite(v) && v >= 0; });
   }
   static FootprintTable* new_table() { return new FootprintTable(); }
   static TableBsdf* new_bsdf() { return new TableBsdf(); }
@@ -402,11 +431,12 @@ TableCacheUsage clear_table_cache(const std::string& dir) {
 }
 
 ClassTableEntry class_table_entry(const KnitMaterial& material, const ClassTableBuild& build,
-                                  const TableCacheSettings& settings) {
+                                  const TableCacheSettings& settings, TableBsdf::Stage stage) {
   ClassTableEntry e;
+  e.stage = build.table_bsdf ? stage : TableBsdf::Stage::Marched;
   if (settings.dir.empty() || library_build_id().empty()) return e;
   Writer w;
-  put_key(w, material, build);
+  put_key(w, material, build, e.stage);
   e.key.assign(w.bytes().begin(), w.bytes().end());
   const auto* k = reinterpret_cast<const unsigned char*>(e.key.data());
   e.path = (fs::path(settings.dir) / (hex64(fnv1a(k, e.key.size())) + kTableCacheExtension)).string();
@@ -414,7 +444,7 @@ ClassTableEntry class_table_entry(const KnitMaterial& material, const ClassTable
 }
 
 DecodeResult decode_class_tables(const std::vector<unsigned char>& bytes, const std::string& key,
-                                 const ClassTableBuild& build, int rows, int cols,
+                                 const ClassTableBuild& build, TableBsdf::Stage stage, int rows, int cols,
                                  std::shared_ptr<const FootprintTable>& table,
                                  std::shared_ptr<const TableBsdf>& bsdf) {
   DecodeResult res;
@@ -447,7 +477,7 @@ DecodeResult decode_class_tables(const std::vector<unsigned char>& bytes, const 
   std::unique_ptr<TableBsdf> b;
   if (has_bsdf) {
     b.reset(TableCacheCodec::new_bsdf());
-    if (!TableCacheCodec::get(p, *b, t->classes_present())) return bad("does not hold its tabulated BSDF");
+    if (!TableCacheCodec::get(p, *b, t->classes_present(), stage)) return bad("does not hold its tabulated BSDF");
   }
   if (p.left() != 0) return bad("has bytes after its tables");
   table.reset(t.release());
@@ -463,7 +493,7 @@ bool load_class_tables(const ClassTableEntry& entry, const ClassTableBuild& buil
   std::error_code ec;
   if (!fs::exists(entry.path, ec)) return false;
   const auto damaged = [&](const std::string& why) {
-    note = "class-table cache entry " + entry.path + " " + why + "; built the tables again";
+    note = "class-table cache entry " + entry.path + " " + why;
     return false;
   };
   const uintmax_t size = fs::file_size(entry.path, ec);
@@ -475,7 +505,7 @@ bool load_class_tables(const ClassTableEntry& entry, const ClassTableBuild& buil
     if (!in || !in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(bytes.size())))
       return damaged("cannot be read");
   }
-  const DecodeResult d = decode_class_tables(bytes, entry.key, build, rows, cols, table, bsdf);
+  const DecodeResult d = decode_class_tables(bytes, entry.key, build, entry.stage, rows, cols, table, bsdf);
   if (d.other_key) return false;  // (the build overwrites it)
   if (!d.ok) return damaged(d.why);
   // Used: its time is the folder's order for trimming (least recently used first).

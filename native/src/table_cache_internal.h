@@ -24,18 +24,24 @@ struct ClassTableBuild {
   int march_stride = 8;
 };
 
-// The entry of `material` and `build` in the cache folder: the key (empty
-// when nothing can be cached: no build id) and the file's path.
+// The entry of `material` and `build` in the cache folder for one stage
+// of the build (TableBsdf::Stage; table_cache.cpp): the key (empty when
+// nothing can be cached: no build id), the file's path and the stage of
+// the TableBsdf it holds (without build.table_bsdf, none: Marched, the
+// class table's only entry).
 struct ClassTableEntry {
   std::string key;
   std::string path;
+  TableBsdf::Stage stage = TableBsdf::Stage::Finished;
 };
 ClassTableEntry class_table_entry(const KnitMaterial& material, const ClassTableBuild& build,
-                                  const TableCacheSettings& settings);
+                                  const TableCacheSettings& settings, TableBsdf::Stage stage);
 
 // Reads the entry into table (and bsdf, when build.table_bsdf), for a
-// pattern of rows x cols cells; false, with `note` saying why when it is not
-// simply absent or another key's, when it cannot be used.
+// pattern of rows x cols cells; false, with `note` saying why ("class-table
+// cache entry PATH is damaged (checksum)", for the caller to add what it
+// did instead) when it is not simply absent or another key's, when it cannot
+// be used.
 bool load_class_tables(const ClassTableEntry& entry, const ClassTableBuild& build, int rows, int cols,
                        std::shared_ptr<const FootprintTable>& table, std::shared_ptr<const TableBsdf>& bsdf,
                        std::string& note);
@@ -49,7 +55,7 @@ struct DecodeResult {
   const char* why = "";
 };
 DecodeResult decode_class_tables(const std::vector<unsigned char>& bytes, const std::string& key,
-                                 const ClassTableBuild& build, int rows, int cols,
+                                 const ClassTableBuild& build, TableBsdf::Stage stage, int rows, int cols,
                                  std::shared_ptr<const FootprintTable>& table,
                                  std::shared_ptr<const TableBsdf>& bsdf);
 // Writes the entry (atomically: a temporary file renamed), then trims the

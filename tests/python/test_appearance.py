@@ -1070,8 +1070,16 @@ class TableCacheTest(unittest.TestCase):
             self.assertFalse(first.table_from_cache)
             self.assertTrue(second.table_from_cache)
             self.assertEqual(first.table_cache_note, "")
-            self.assertEqual(len(list(pathlib.Path(tmp).glob("*.knittable"))), 1)
+            # Two entries: the finished tables and their marches.
+            self.assertEqual(len(list(pathlib.Path(tmp).glob("*.knittable"))), 2)
             self.assertLess(second.table_seconds, first.table_seconds)
+            # Other colours: finished from the cached marches, not marched again.
+            red = knitshade.KnitMaterial(stockinette, mode="multi_scale", uv_scale=1.0,
+                                         bsdf={"reflect_colors": [[0.8, 0.1, 0.1]]})
+            self.assertFalse(red.table_from_cache)
+            self.assertTrue(red.table_marches_from_cache)
+            self.assertFalse(second.table_marches_from_cache)
+            self.assertLess(red.table_seconds, first.table_seconds)
             # Footprints of several cells, from the class table: the same shading.
             rng = np.random.default_rng(5)
             n = 64

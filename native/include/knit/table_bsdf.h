@@ -58,8 +58,24 @@ class TableBsdf {
   // march_stride of them (a stratified prefix of the rays' net)
   // shadow-marched there too: V enters as the lit share of f over those.
   // Every core.
+  //
+  // The build has two stages. The marches (Stage::Marched) give values that
+  // hold none of the material's colours: the yarn BSDF's parts per body
+  // colour and the lit share. Finishing them (finished()) folds the walk in
+  // the palette's colours where table_fold applies, and sums the sampling
+  // rows; it is a few hundredths of the marches' time. The class-table
+  // cache keeps the two stages apart, so that a material which differs from
+  // a cached one only in its colours (or table_fold) is finished from the
+  // cached marches instead of marched again.
+  enum class Stage { Marched, Finished };
   TableBsdf(const KnitMaterial& material, const FootprintTable& table, int hits_per_view = 512,
-            int march_stride = 8);
+            int march_stride = 8, Stage stage = Stage::Finished);
+  // This table finished for `material`, which must be the material it was
+  // marched for up to its colours and table_fold (the class-table cache's
+  // key says which parameters those are), with `table` its class table.
+  // Throws std::logic_error when this table is already finished.
+  TableBsdf finished(const KnitMaterial& material, const FootprintTable& table) const;
+  Stage stage() const { return rows_.empty() ? Stage::Marched : Stage::Finished; }
 
   // A footprint's shading seen from wo (fabric frame, unit, either side):
   // the view nodes to mix, their weights, and the classes' shares of the
@@ -132,7 +148,10 @@ class TableBsdf {
   // pattern of one colour index); else 1.
   int colours() const { return colours_; }
 
-  size_t bytes() const { return sizeof(*this) + values_.size() * sizeof(uint16_t) + rows_.size() * sizeof(float); }
+  size_t bytes() const {
+    return sizeof(*this) + values_.size() * sizeof(uint16_t) + rows_.size() * sizeof(float) +
+           hit_frac_.size() * sizeof(double);
+  }
   double build_seconds() const { return seconds_; }  // (0 when read from the class-table cache)
   // The tabulated A, Br, Bt (without V) and the lit share of entry `slot`
   // (a class slot; folded, class slot * colours() + colour), view node
@@ -161,6 +180,9 @@ class TableBsdf {
   // become the classes times `colours`, the palette's first colours.
   void fold(const KnitMaterial& material, int colours, const std::vector<double>& cell_share,
             const std::vector<double>& hit_frac);
+  // The finishing stage (finished()): the fold where it applies, then the
+  // sampling rows.
+  void finish(const KnitMaterial& material, const FootprintTable& table);
 
   static constexpr int kValues = 4;
   int slots_ = 0;  // entries per node pair
@@ -182,7 +204,11 @@ class TableBsdf {
   // [view node][theta row, then the sphere][slot][A, Br, Bt, lit share]: the
   // values summed over the row's light nodes times their cells' solid
   // angle, and over all rows (sample, pdf; four floats for four lanes).
+  // (empty until the table is finished)
   std::vector<float> rows_;
+  // Per class slot and view node, the share of the view rays that hit yarn
+  // (the fold's weights of the classes met inside a footprint).
+  std::vector<double> hit_frac_;
   double seconds_ = 0;
 };
 

@@ -3,13 +3,17 @@
 // the second render of a scene does not build them again (about 0.4-1.6 s
 // per material on 2 cores, docs/multiscale.md, "The class-table cache").
 //
-// An entry is found by a key made of everything the build reads: the
-// pattern, every material parameter, the build's own settings, the SIMD
-// path that counts the layers and the GNU build id of the binary that holds
-// this code (so an entry never outlives the code that wrote it). The key is
-// stored in the entry and compared in full, and a checksum covers the
-// whole file: a damaged entry, one of another key or an unreadable folder
-// means a build, as if there were no cache, with a note saying why
+// A material has two entries, one per stage of the build (TableBsdf::Stage):
+// its marches and its finished tables, so that a material cached in other
+// colours is only finished. An entry is found by a key made of everything
+// its stage reads: the pattern, the material parameters that stage reads
+// (table_cache.cpp, put_key, names those it leaves out), the build's own
+// settings, the SIMD path that counts the layers and the GNU build id of
+// the binary that holds this code (so an entry never outlives the code that
+// wrote it). The key is stored in the entry and compared in full, and a
+// checksum covers the whole file: a damaged entry, one of another key or
+// an unreadable folder means a build (or finishing the cached marches), as
+// if there were no cache, with a note saying why
 // (KnitMaterial::table_cache_note), never a failed load. A loaded table is
 // the built one to the last bit.
 //
