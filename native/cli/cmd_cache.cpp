@@ -22,7 +22,8 @@ nothing else).
 options:
   --dir DIR   the folder (default: as `knitshade render` picks it:
               $KNITSHADE_CACHE_DIR, else $XDG_CACHE_HOME/knitshade, else
-              ~/.cache/knitshade; KNITSHADE_CACHE_DIR=off: none)
+              ~/.cache/knitshade, or where that cannot be written,
+              $TMPDIR/knitshade-cache-UID; KNITSHADE_CACHE_DIR=off: none)
   --clear     remove the entries
 )";
 
@@ -50,7 +51,7 @@ int run(const std::vector<std::string>& args) {
       throw UsageError{"unknown argument " + a};
     }
   }
-  if (!have_dir) dir = default_table_cache_dir();
+  if (!have_dir) dir = writable_table_cache_dir();
   if (dir.empty()) {
     std::printf("class-table cache: off (KNITSHADE_CACHE_DIR=off, or no home folder)\n");
     return 0;

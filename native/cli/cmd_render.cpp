@@ -41,7 +41,8 @@ const char* kUsage =
     "                           `knitshade compare --mask`)\n"
     "  --cache-dir DIR          keep multi-scale class tables in DIR between runs (default:\n"
     "                           $KNITSHADE_CACHE_DIR, else $XDG_CACHE_HOME/knitshade, else\n"
-    "                           ~/.cache/knitshade; KNITSHADE_CACHE_DIR=off: none)\n"
+    "                           ~/.cache/knitshade, or where that cannot be written\n"
+    "                           $TMPDIR/knitshade-cache-UID; KNITSHADE_CACHE_DIR=off: none)\n"
     "  --no-cache               build the class tables and keep nothing\n";
 
 int run(const std::vector<std::string>& args) {
@@ -99,7 +100,7 @@ int run(const std::vector<std::string>& args) {
   if (no_cache)
     job.table_cache_dir = std::string();
   else if (!job.table_cache_dir)
-    job.table_cache_dir = knit::default_table_cache_dir();
+    job.table_cache_dir = knit::writable_table_cache_dir();
 
   const RenderJobResult r = run_render_job(job, [](const std::string& w) {
     std::fprintf(stderr, "knitshade render: warning: %s\n", w.c_str());

@@ -44,4 +44,9 @@ first. knitshade.default_table_cache_dir() is the CLI's folder.)doc");
   m.def("default_table_cache_dir", &knit::default_table_cache_dir, R"doc(
 The CLI's class-table cache folder: $KNITSHADE_CACHE_DIR ("off": none, returned
 as ""), else $XDG_CACHE_HOME/knitshade, else ~/.cache/knitshade.)doc");
+  m.def("writable_table_cache_dir", &knit::writable_table_cache_dir, R"doc(
+The folder the CLI uses when none is given: default_table_cache_dir(), or where
+that is under $XDG_CACHE_HOME or $HOME and cannot be written (a read-only home),
+a folder of this user's own under $TMPDIR (else /tmp), knitshade-cache-<uid>
+("" when that is not the user's own or others can write to it).)doc");
 }

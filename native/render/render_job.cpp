@@ -119,6 +119,7 @@ RenderJobResult run_render_job(const RenderJob& job, const std::function<void(co
                                                     : rep.knit_tables_built);
     }
   rep.parse_seconds = std::max(0.0, parse_seconds - rep.knit_table_seconds);
+  rep.table_cache_dir = table_cache().dir;
   rep.load_seconds = scene.stats().load_seconds;
   rep.build_seconds = scene.stats().build_seconds;
   rep.render_seconds = r.seconds;

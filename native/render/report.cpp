@@ -141,7 +141,8 @@ std::string RenderReport::to_json() const {
                   {"render", render_seconds}, {"write", write_seconds}, {"total", total_seconds}};
   j["knit_tables"] = {{"built", knit_tables_built},
                       {"from_cache", knit_tables_cached},
-                      {"finished_from_cached_marches", knit_tables_finished}};
+                      {"finished_from_cached_marches", knit_tables_finished},
+                      {"cache_dir", table_cache_dir.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(table_cache_dir)}};
   j["samples"] = samples;
   j["samples_per_second"] = samples_per_second();
   j["rays"] = {{"camera", camera_rays}, {"bounce", bounce_rays}, {"shadow", shadow_rays}, {"total", total_rays()}};

@@ -19,6 +19,7 @@ struct RenderReport {
   // cache, or finished here from the cache's marches (a material cached with
   // other colours: KnitMaterial::table_marches_from_cache).
   int knit_tables_built = 0, knit_tables_cached = 0, knit_tables_finished = 0;
+  std::string table_cache_dir;  // the class-table cache's folder; empty: off
   uint64_t samples = 0;
   uint64_t camera_rays = 0, bounce_rays = 0, shadow_rays = 0;
   uint64_t invalid_samples = 0, pass_limit = 0;

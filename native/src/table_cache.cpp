@@ -19,6 +19,7 @@
 #include "knit/table_cache.h"
 
 #include <link.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -367,6 +368,33 @@ std::string default_table_cache_dir() {
   const char* home = std::getenv("HOME");
   if (home && *home) return (fs::path(home) / ".cache" / "knitshade").string();
   return {};
+}
+
+namespace {
+// Whether `dir` exists as a folder (or can be made) and can be written to.
+bool writable_folder(const fs::path& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  return fs::is_directory(dir, ec) && ::access(dir.c_str(), W_OK | X_OK) == 0;
+}
+}  // namespace
+
+std::string writable_table_cache_dir() {
+  const std::string preferred = default_table_cache_dir();
+  const char* env = std::getenv("KNITSHADE_CACHE_DIR");
+  if ((env && *env) || preferred.empty() || writable_folder(preferred)) return preferred;
+  const char* tmp = std::getenv("TMPDIR");
+  const fs::path base = tmp && *tmp == '/' ? fs::path(tmp) : fs::path("/tmp");
+  const fs::path dir = base / ("knitshade-cache-" + std::to_string(long(::getuid())));
+  std::error_code ec;
+  if (fs::create_directory(dir, ec)) fs::permissions(dir, fs::perms::owner_all, fs::perm_options::replace, ec);
+  // (a folder someone else made there first is not used: it could hold
+  // entries of theirs, or be swapped for others)
+  struct stat st {};
+  if (::lstat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode) || st.st_uid != ::getuid() ||
+      (st.st_mode & (S_IWGRP | S_IWOTH)) != 0 || ::access(dir.c_str(), W_OK | X_OK) != 0)
+    return {};
+  return dir.string();
 }
 
 const std::string& library_build_id() {

@@ -189,6 +189,64 @@ TEST(TableCache, OffByDefaultAndItsDefaultFolder) {
   }
 }
 
+TEST(TableCache, AHomeThatCannotBeWrittenFallsBackToAFolderOfTheUsersOwn) {
+  // writable_table_cache_dir: the default folder, else (a read-only home)
+  // $TMPDIR/knitshade-cache-<uid>, made 0700; never a fallback that is not
+  // the user's own. (These tests run as root, for whom permission bits do
+  // not stop a write: a home under a file is one that cannot be made.)
+  const fs::path dir = test_folder();
+  struct Env {
+    const char* name;
+    std::string old;
+    bool had;
+  };
+  std::vector<Env> saved;
+  for (const char* n : {"KNITSHADE_CACHE_DIR", "XDG_CACHE_HOME", "HOME", "TMPDIR"}) {
+    const char* v = std::getenv(n);
+    saved.push_back({n, v ? v : "", v != nullptr});
+  }
+  write_bytes(dir / "a_file", {'x'});
+  fs::create_directories(dir / "tmp");
+  unsetenv("KNITSHADE_CACHE_DIR");
+  unsetenv("XDG_CACHE_HOME");
+  setenv("TMPDIR", (dir / "tmp").c_str(), 1);
+  const fs::path fallback = dir / "tmp" / ("knitshade-cache-" + std::to_string(long(getuid())));
+  // A home that can be written: its own cache folder, made.
+  setenv("HOME", (dir / "home").c_str(), 1);
+  EXPECT_EQ(writable_table_cache_dir(), (dir / "home" / ".cache" / "knitshade").string());
+  EXPECT_TRUE(fs::is_directory(dir / "home" / ".cache" / "knitshade"));
+  // One that cannot: the fallback, the user's own and closed to others.
+  setenv("HOME", (dir / "a_file" / "home").c_str(), 1);
+  EXPECT_EQ(default_table_cache_dir(), (dir / "a_file" / "home" / ".cache" / "knitshade").string());
+  EXPECT_EQ(writable_table_cache_dir(), fallback.string());
+  ASSERT_TRUE(fs::is_directory(fallback));
+  EXPECT_EQ(fs::status(fallback).permissions() & fs::perms::all, fs::perms::owner_all);
+  // ... and a cache there works.
+  {
+    CacheScope scope(writable_table_cache_dir());
+    const KnitMaterial first = material();
+    EXPECT_TRUE(first.table_cache_note().empty()) << first.table_cache_note();
+    EXPECT_TRUE(material().table_from_cache());
+  }
+  // A fallback others can write to, or a file in its place: not used.
+  fs::permissions(fallback, fs::perms::others_write, fs::perm_options::add);
+  EXPECT_EQ(writable_table_cache_dir(), "");
+  fs::remove_all(fallback);
+  write_bytes(fallback, {'x'});
+  EXPECT_EQ(writable_table_cache_dir(), "");
+  // $KNITSHADE_CACHE_DIR as it is set, writable or not (its note says so).
+  setenv("KNITSHADE_CACHE_DIR", (dir / "a_file" / "mine").c_str(), 1);
+  EXPECT_EQ(writable_table_cache_dir(), (dir / "a_file" / "mine").string());
+  setenv("KNITSHADE_CACHE_DIR", "off", 1);
+  EXPECT_EQ(writable_table_cache_dir(), "");
+  for (const Env& e : saved) {
+    if (e.had)
+      setenv(e.name, e.old.c_str(), 1);
+    else
+      unsetenv(e.name);
+  }
+}
+
 TEST(TableCache, ACachedMaterialHoldsTheBuiltTablesBitForBit) {
   const fs::path dir = test_folder();
   const KnitMaterial plain = material("KP\nPK\n", {Rgb{0.7f, 0.2f, 0.1f}});  // cache off: built

@@ -2,6 +2,7 @@
 // user would: exit codes, the one-line errors, outputs and the JSON report.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <OpenImageIO/imageio.h>
 
@@ -410,6 +411,25 @@ TEST(Cli, ClassTablesComeFromTheCacheTheSecondTime) {
   EXPECT_NE(r5.err.find("is damaged (checksum); built the tables again"), std::string::npos) << r5.err;
   EXPECT_EQ(nlohmann::json::parse(test::read_file(dir + "/fifth.json"))["knit_tables"]["built"], 2);
   EXPECT_TRUE(exr_pixels(dir + "/fifth.exr") == image);
+  // A home that cannot be written (and no KNITSHADE_CACHE_DIR): the cache
+  // in a folder of the user's own under $TMPDIR, no warning, and the second
+  // render reads it.
+  test::write_file(dir, "not_a_folder", "x");
+  std::filesystem::remove_all(dir + "/tmp");
+  std::filesystem::create_directories(dir + "/tmp");
+  const std::string home_env = "env -u KNITSHADE_CACHE_DIR -u XDG_CACHE_HOME HOME=" + dir + "/not_a_folder/home TMPDIR=" +
+                          dir + "/tmp ";
+  for (int pass = 0; pass < 2; ++pass) {
+    const std::string cmd = home_env + KNIT_CLI + " render " + scene + " -o " + dir + "/home.exr --report " + dir +
+                            "/home.json > " + dir + "/stdout.txt 2> " + dir + "/stderr.txt";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << test::read_file(dir + "/stderr.txt");
+    EXPECT_EQ(test::read_file(dir + "/stderr.txt").find("warning"), std::string::npos)
+        << test::read_file(dir + "/stderr.txt");
+    const nlohmann::json rh = nlohmann::json::parse(test::read_file(dir + "/home.json"));
+    EXPECT_EQ(rh["knit_tables"]["cache_dir"], dir + "/tmp/knitshade-cache-" + std::to_string(long(getuid())));
+    EXPECT_EQ(rh["knit_tables"]["from_cache"], pass == 0 ? 0 : 2);
+  }
+  EXPECT_TRUE(exr_pixels(dir + "/home.exr") == image);
   // Both options at once, or an empty folder name: usage errors.
   EXPECT_EQ(run(dir, "render " + scene + " -o x.exr --cache-dir " + cache + " --no-cache").code, 2);
   EXPECT_EQ(run(dir, "render " + scene + " -o x.exr --cache-dir ''").code, 2);

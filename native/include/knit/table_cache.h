@@ -40,6 +40,17 @@ TableCacheSettings table_cache();
 // $XDG_CACHE_HOME/knitshade, else $HOME/.cache/knitshade, else "".
 std::string default_table_cache_dir();
 
+// The folder `knitshade render` and `knitshade cache` use when none is
+// given: default_table_cache_dir(), unless that is the one under
+// $XDG_CACHE_HOME or $HOME and it cannot be made or written to (a read-only
+// home: a container, a render node), in which case a folder of this user's
+// own under $TMPDIR (else /tmp), knitshade-cache-<uid>, made with mode 0700;
+// a fallback folder that exists but is not this user's, or that others can
+// write to, is not used (""). $KNITSHADE_CACHE_DIR is used as it is set:
+// that choice was the user's, and a folder it names that cannot be written
+// gives the cache's usual note.
+std::string writable_table_cache_dir();
+
 // The GNU build id (hex) of the binary that holds this library's code;
 // empty when it has none, and then nothing is cached.
 const std::string& library_build_id();
