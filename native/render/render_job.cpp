@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "knit/table_cache.h"
+#include "knit/table_progress.h"
 #include "knit/version.h"
 #include "render/output.h"
 #include "render/renderer.h"
@@ -20,6 +21,23 @@ namespace {
 double since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
+
+// The class tables' builds while the scene loads, shown as the render's
+// progress is: a bar per material that builds them ("knit class tables").
+class TableBuildBar : public TableBuildProgress {
+ public:
+  explicit TableBuildBar(ProgressMode mode) : mode_(mode) { set_table_build_progress(this); }
+  ~TableBuildBar() override { set_table_build_progress(nullptr); }
+  void begin(uint64_t total) override { bar_ = std::make_unique<Progress>(mode_, total, "knit class tables"); }
+  void add(uint64_t units) override {
+    if (bar_) bar_->add(units);
+  }
+  void end() override { bar_.reset(); }  // (its last line drawn)
+
+ private:
+  ProgressMode mode_;
+  std::unique_ptr<Progress> bar_;
+};
 }  // namespace
 
 RenderJobResult run_render_job(const RenderJob& job, const std::function<void(const std::string&)>& warn) {
@@ -47,7 +65,10 @@ RenderJobResult run_render_job(const RenderJob& job, const std::function<void(co
     cache.dir = *job.table_cache_dir;
     set_table_cache(cache);
   }
+  std::unique_ptr<TableBuildBar> table_bar;
+  if (job.progress != ProgressMode::Quiet) table_bar = std::make_unique<TableBuildBar>(job.progress);
   SceneDesc desc = load_scene_file(job.scene_file, job.explicit_yarns && !job.knit_preview_diffuse);
+  table_bar.reset();
   const double parse_seconds = since(t_start);
   Warnings warnings = desc.warnings;
   for (const MaterialDesc& m : desc.materials)

@@ -2,6 +2,8 @@
 
 #include <tbb/parallel_for.h>
 
+#include "knit/table_progress.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -215,9 +217,16 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
       }
     }
   };
+  TableBuildProgress* const progress = table_build_progress();
   tbb::parallel_for(0, kClasses * kThetaBins, [&](int job) {
     const int cls = job / kThetaBins, it = job % kThetaBins;
     if (slot_[size_t(cls)] < 0) return;
+    struct Done {  // (however the job ends)
+      TableBuildProgress* p;
+      ~Done() {
+        if (p) p->add(kClassTableJobUnits);
+      }
+    } done{progress};
     const size_t slot = size_t(slot_[size_t(cls)]);
     const std::vector<std::pair<int, int>>& list = cells[size_t(cls)];
     std::vector<float> hx, hy;  // hit points whose layers are counted in one batch

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "knit/table_progress.h"
 #include "knit/yarns.h"
 #include "table_cache_internal.h"
 
@@ -129,7 +130,26 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
       store_class_tables(e, cache, *table_, bsdf, note);
       if (!note.empty() && std::find(stores.begin(), stores.end(), note) == stores.end()) stores.push_back(note);
     };
+    // (the progress observer's begin and end around the builds: the class
+    // table's jobs, then the tabulated BSDF's marches)
+    TableBuildProgress* const progress = table_build_progress();
+    struct ProgressScope {  // (end() also when a build throws)
+      TableBuildProgress* p;
+      bool open = false;
+      void close() {
+        if (open) p->end();
+        open = false;
+      }
+      ~ProgressScope() { close(); }
+    } scope{progress};
     const auto build_table = [&] {
+      if (progress) {
+        int classes = 0;
+        for (const auto& list : FootprintTable::class_cells(surface_)) classes += !list.empty();
+        progress->begin(uint64_t(classes) * (FootprintTable::kThetaBins * kClassTableJobUnits +
+                                             (build.table_bsdf ? TableBsdf::kNodes * kTableBsdfJobUnits : 0)));
+        scope.open = true;
+      }
       table_ = std::make_shared<const FootprintTable>(surface_, params_.capm_options, build.rays_per_direction,
                                                       FootprintTable::LayerCounts::Auto, build.sub_cells);
     };
@@ -145,11 +165,13 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
           build_table();
           marched = std::make_shared<const TableBsdf>(*this, *table_, build.hits_per_view, build.march_stride,
                                                       TableBsdf::Stage::Marched);
+          scope.close();
           store(marches, marched.get());
         }
         table_bsdf_ = std::make_shared<const TableBsdf>(marched->finished(*this, *table_));
       } else {
         build_table();
+        scope.close();
       }
       store(done, table_bsdf_.get());
     }

@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "knit/shading.h"
+#include "knit/table_progress.h"
 
 namespace knit {
 
@@ -180,8 +181,15 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
   // the others copy it (views) or its values (lights).
   const auto is_pole_copy = [](int node) { return (node / kPhi == 0 || node / kPhi == kTheta - 1) && node % kPhi; };
   std::vector<double> hit_frac(size_t(slots_) * kNodes, 0.0);  // per slot and view node: hits / rays
+  TableBuildProgress* const progress = table_build_progress();
   tbb::parallel_for(0, slots_ * kNodes, [&](int job) {
     const int slot = job / kNodes, view = job % kNodes;
+    struct Done {  // (however the job ends)
+      TableBuildProgress* p;
+      ~Done() {
+        if (p) p->add(kTableBsdfJobUnits);
+      }
+    } done{progress};
     if (is_pole_copy(view)) return;
     const std::vector<std::pair<int, int>>& list = cells[size_t(table.class_of_slot(slot))];
     const Vec3 wo = light[size_t(view)];

@@ -39,6 +39,7 @@
 #include <vector>
 
 #include "knit/shading.h"
+#include "knit/table_progress.h"
 #include "table_cache_internal.h"
 
 namespace knit {
@@ -349,6 +350,13 @@ struct TableCacheCodec {
   static FootprintTable* new_table() { return new FootprintTable(); }
   static TableBsdf* new_bsdf() { return new TableBsdf(); }
 };
+
+namespace {
+std::atomic<TableBuildProgress*> g_progress{nullptr};
+}  // namespace
+
+void set_table_build_progress(TableBuildProgress* progress) { g_progress.store(progress); }
+TableBuildProgress* table_build_progress() { return g_progress.load(); }
 
 void set_table_cache(const TableCacheSettings& settings) {
   std::lock_guard<std::mutex> lock(g_mutex);

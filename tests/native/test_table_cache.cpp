@@ -7,6 +7,7 @@
 
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -20,6 +21,7 @@
 #include "../../native/src/table_cache_internal.h"  // decode_class_tables
 #include "knit/shading.h"
 #include "knit/table_cache.h"
+#include "knit/table_progress.h"
 
 namespace {
 
@@ -245,6 +247,49 @@ TEST(TableCache, AHomeThatCannotBeWrittenFallsBackToAFolderOfTheUsersOwn) {
     else
       unsetenv(e.name);
   }
+}
+
+TEST(TableCache, ABuildReportsItsProgressAndAReadDoesNot) {
+  // The observer of knit/table_progress.h: begin once with the build's
+  // units, every unit added before end, from any thread; nothing at all
+  // when the tables come from the cache or are finished from its marches.
+  struct Counter : TableBuildProgress {
+    std::atomic<uint64_t> added{0};
+    uint64_t total = 0, at_end = 0;
+    int begins = 0, ends = 0;
+    bool added_outside = false;
+    void begin(uint64_t t) override {
+      ++begins;
+      total = t;
+      added = 0;
+    }
+    void add(uint64_t u) override {
+      if (begins == ends) added_outside = true;
+      added += u;
+    }
+    void end() override {
+      ++ends;
+      at_end = added;
+    }
+  } counter;
+  set_table_build_progress(&counter);
+  const fs::path dir = test_folder();
+  CacheScope scope(dir);
+  const KnitMaterial built = material("K P\nP K\n");
+  EXPECT_EQ(counter.begins, 1);
+  EXPECT_EQ(counter.ends, 1);
+  // two classes: per class 24 class-table jobs of 1 unit, 144 BSDF jobs of 2
+  EXPECT_EQ(counter.total, uint64_t(2 * (24 + 2 * 144)));
+  EXPECT_EQ(counter.at_end, counter.total);
+  EXPECT_FALSE(counter.added_outside);
+  const KnitMaterial read = material("K P\nP K\n");
+  const KnitMaterial recoloured = material("K P\nP K\n", {Rgb{0.2f, 0.6f, 0.2f}});
+  ASSERT_TRUE(read.table_from_cache());
+  ASSERT_TRUE(recoloured.table_marches_from_cache());
+  EXPECT_EQ(counter.begins, 1);
+  EXPECT_EQ(counter.ends, 1);
+  set_table_build_progress(nullptr);
+  EXPECT_EQ(table_build_progress(), nullptr);
 }
 
 TEST(TableCache, ACachedMaterialHoldsTheBuiltTablesBitForBit) {

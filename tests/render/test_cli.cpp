@@ -350,6 +350,14 @@ TEST(Cli, ClassTablesComeFromTheCacheTheSecondTime) {
     return std::make_pair(r, nlohmann::json::parse(test::read_file(dir + "/" + name + ".json")));
   };
   const auto [r1, first] = render("first", "--cache-dir " + cache);
+  // The builds' progress on stderr (not a terminal here: a line per tenth
+  // reached, the last at 100%), one bar per material that builds; none for
+  // tables read from the cache.
+  int table_bars = 0;
+  for (size_t at = r1.err.find("knit class tables: 100%"); at != std::string::npos;
+       at = r1.err.find("knit class tables: 100%", at + 1))
+    ++table_bars;
+  EXPECT_EQ(table_bars, 2) << r1.err;
   EXPECT_EQ(first["knit_tables"]["built"], 2);
   EXPECT_EQ(first["knit_tables"]["from_cache"], 0);
   const auto count_entries = [&] {
@@ -363,6 +371,7 @@ TEST(Cli, ClassTablesComeFromTheCacheTheSecondTime) {
   EXPECT_EQ(second["knit_tables"]["from_cache"], 2);
   EXPECT_NE(r2.out.find("knit class tables"), std::string::npos) << r2.out;
   EXPECT_NE(r2.out.find("from the cache"), std::string::npos) << r2.out;
+  EXPECT_EQ(r2.err.find("knit class tables"), std::string::npos) << r2.err;
   EXPECT_LT(second["seconds"]["knit_tables"].get<double>(), first["seconds"]["knit_tables"].get<double>());
   const std::vector<float> image = exr_pixels(dir + "/first.exr");
   ASSERT_EQ(image.size(), size_t(24 * 16 * 3));

@@ -1,0 +1,34 @@
+// Progress of the multi-scale class-table builds, for a host to show: a
+// first multi-scale render of a material spends seconds building its
+// tables (KnitMaterial's constructor), before any sample.
+//
+// KnitMaterial calls begin() when it starts to build (not when the tables
+// come from the class-table cache), FootprintTable and TableBsdf add() the
+// work units of each job they finish, from their building threads, and the
+// material calls end() when its tables are done. The units weigh a job of
+// the TableBsdf's marches twice one of the class table's, about as they
+// cost; finishing a table (hundredths of a second) is not counted.
+#pragma once
+
+#include <cstdint>
+
+namespace knit {
+
+class TableBuildProgress {
+ public:
+  virtual ~TableBuildProgress() = default;
+  virtual void begin(uint64_t total_units) = 0;
+  virtual void add(uint64_t units) = 0;  // (called concurrently)
+  virtual void end() = 0;
+};
+
+// The process's observer (null: none), not owned: set it before materials
+// are constructed and keep it alive while any is.
+void set_table_build_progress(TableBuildProgress* progress);
+TableBuildProgress* table_build_progress();
+
+// Units of each build job (see above).
+inline constexpr uint64_t kClassTableJobUnits = 1;
+inline constexpr uint64_t kTableBsdfJobUnits = 2;
+
+}  // namespace knit
