@@ -1173,6 +1173,11 @@ max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
           "the cache held this material with other colours (or table_fold), and only the "
           "colours were applied, not the marches run again.")
       .def_property_readonly(
+          "table_shadows_from_cache", &KnitMaterial::table_shadows_from_cache,
+          "Whether the class table was marched from shadows found in the class-table cache: "
+          "the cache held this geometry with other yarn BSDF or ply parameters, and the "
+          "self-shadowing marches (most of a build) were not run again.")
+      .def_property_readonly(
           "table_cache_note", &KnitMaterial::table_cache_note,
           "What went wrong with the class-table cache, if anything (a damaged entry, a "
           "folder that cannot be written); the table was then built as without it.")

@@ -137,6 +137,7 @@ RenderJobResult run_render_job(const RenderJob& job, const std::function<void(co
       rep.knit_table_seconds += m.knit.model->table_seconds();
       ++(m.knit.model->table_from_cache()           ? rep.knit_tables_cached
          : m.knit.model->table_marches_from_cache() ? rep.knit_tables_finished
+         : m.knit.model->table_shadows_from_cache() ? rep.knit_tables_shaded
                                                     : rep.knit_tables_built);
     }
   rep.parse_seconds = std::max(0.0, parse_seconds - rep.knit_table_seconds);

@@ -43,19 +43,19 @@ std::string RenderReport::to_text() const {
   // The knit class tables are built while the scene is parsed; parse_seconds
   // leaves them out, so the parts still add up to the wall time.
   // Explicit yarns: sweeping the tubes and building their BVH.
-  char tables[128] = "", yarns[64] = "";
-  const int ntables = knit_tables_built + knit_tables_cached + knit_tables_finished;
-  if (ntables > 0 && knit_tables_cached == ntables)
+  char tables[192] = "", yarns[64] = "";
+  const int ntables = knit_tables_built + knit_tables_cached + knit_tables_finished + knit_tables_shaded;
+  if (ntables > 0 && knit_tables_cached == ntables) {
     std::snprintf(tables, sizeof tables, "knit class tables %.2f from the cache, ", knit_table_seconds);
-  else if (ntables > 0 && knit_tables_finished == ntables)
-    std::snprintf(tables, sizeof tables, "knit class tables %.2f finished from the cached marches, ",
-                  knit_table_seconds);
-  else if (knit_tables_cached > 0 || knit_tables_finished > 0)
-    std::snprintf(tables, sizeof tables,
-                  "knit class tables %.2f (%d of %d from the cache, %d finished from its marches), ",
-                  knit_table_seconds, knit_tables_cached, ntables, knit_tables_finished);
-  else if (ntables > 0 || knit_table_seconds > 0)
+  } else if (knit_tables_cached > 0 || knit_tables_finished > 0 || knit_tables_shaded > 0) {
+    // e.g. "(1 of 3 from the cache, 1 finished from its marches, 1 marched from its shadows)"
+    std::string parts = std::to_string(knit_tables_cached) + " of " + std::to_string(ntables) + " from the cache";
+    if (knit_tables_finished > 0) parts += ", " + std::to_string(knit_tables_finished) + " finished from its marches";
+    if (knit_tables_shaded > 0) parts += ", " + std::to_string(knit_tables_shaded) + " marched from its shadows";
+    std::snprintf(tables, sizeof tables, "knit class tables %.2f (%s), ", knit_table_seconds, parts.c_str());
+  } else if (ntables > 0 || knit_table_seconds > 0) {
     std::snprintf(tables, sizeof tables, "knit class tables %.2f, ", knit_table_seconds);
+  }
   if (explicit_yarns) std::snprintf(yarns, sizeof yarns, "yarns %.2f, ", yarn_build_seconds);
   std::snprintf(buf, sizeof buf, "  wall time   %.2f s (parse %.2f, %sload %.2f, %sBVH %.2f, render %.2f, write %.2f)\n",
                 total_seconds, parse_seconds, tables, load_seconds, yarns, build_seconds, render_seconds,
@@ -142,6 +142,7 @@ std::string RenderReport::to_json() const {
   j["knit_tables"] = {{"built", knit_tables_built},
                       {"from_cache", knit_tables_cached},
                       {"finished_from_cached_marches", knit_tables_finished},
+                      {"marched_from_cached_shadows", knit_tables_shaded},
                       {"cache_dir", table_cache_dir.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(table_cache_dir)}};
   j["samples"] = samples;
   j["samples_per_second"] = samples_per_second();

@@ -16,9 +16,11 @@ struct RenderReport {
   double parse_seconds = 0, knit_table_seconds = 0, load_seconds = 0, build_seconds = 0, render_seconds = 0,
          write_seconds = 0, total_seconds = 0;
   // Knit materials with a class table: built here, read from the class-table
-  // cache, or finished here from the cache's marches (a material cached with
-  // other colours: KnitMaterial::table_marches_from_cache).
-  int knit_tables_built = 0, knit_tables_cached = 0, knit_tables_finished = 0;
+  // cache, finished here from the cache's marches (a material cached with
+  // other colours: KnitMaterial::table_marches_from_cache), or marched here
+  // from the cache's shadows (cached with other yarn parameters:
+  // KnitMaterial::table_shadows_from_cache).
+  int knit_tables_built = 0, knit_tables_cached = 0, knit_tables_finished = 0, knit_tables_shaded = 0;
   std::string table_cache_dir;  // the class-table cache's folder; empty: off
   uint64_t samples = 0;
   uint64_t camera_rays = 0, bounce_rays = 0, shadow_rays = 0;

@@ -158,27 +158,53 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
     table_from_cache_ = load(done, table_bsdf_);
     if (!table_from_cache_) {
       if (build.table_bsdf) {
+        // The finished tables from the marches, the marches from the
+        // shadows: the earliest stage not cached is built, and each stage
+        // built is stored.
         const ClassTableEntry marches = class_table_entry(*this, build, cache, TableBsdf::Stage::Marched);
         std::shared_ptr<const TableBsdf> marched;
         table_marches_from_cache_ = load(marches, marched);
         if (!table_marches_from_cache_) {
-          build_table();
-          marched = std::make_shared<const TableBsdf>(*this, *table_, build.hits_per_view, build.march_stride,
-                                                      TableBsdf::Stage::Marched);
+          const ClassTableEntry shadows = class_table_entry(*this, build, cache, TableBsdf::Stage::Shadows);
+          std::shared_ptr<const TableBsdf> cached_shadows;
+          table_shadows_from_cache_ = load(shadows, cached_shadows);
+          if (table_shadows_from_cache_) {
+            if (progress) {
+              progress->begin(uint64_t(table_->classes_present()) * TableBsdf::kNodes * kTableBsdfJobUnits);
+              scope.open = true;
+            }
+            marched = std::make_shared<const TableBsdf>(*this, *table_, build.hits_per_view, build.march_stride,
+                                                        TableBsdf::Stage::Marched, cached_shadows.get());
+          } else {
+            build_table();
+            std::shared_ptr<const TableBsdf> shadows_built;
+            marched = std::make_shared<const TableBsdf>(*this, *table_, build.hits_per_view, build.march_stride,
+                                                        TableBsdf::Stage::Marched, nullptr, &shadows_built);
+            store(shadows, shadows_built.get());
+          }
           scope.close();
           store(marches, marched.get());
         }
         table_bsdf_ = std::make_shared<const TableBsdf>(marched->finished(*this, *table_));
       } else {
-        build_table();
-        scope.close();
+        const ClassTableEntry shadows = class_table_entry(*this, build, cache, TableBsdf::Stage::Shadows);
+        std::shared_ptr<const TableBsdf> none;
+        if (shadows.path != done.path) table_from_cache_ = load(shadows, none);  // (the same entry: tried above)
+        if (!table_from_cache_) {
+          build_table();
+          scope.close();
+          store(shadows, nullptr);
+        }
       }
-      store(done, table_bsdf_.get());
+      if (build.table_bsdf) store(done, table_bsdf_.get());
     }
     std::string notes;
     for (const std::string& n : damaged) notes += (notes.empty() ? "" : "; ") + n;
     if (!damaged.empty())
-      notes += table_marches_from_cache_ ? "; finished the tables from the cached marches" : "; built the tables again";
+      notes += table_from_cache_           ? ""
+               : table_marches_from_cache_ ? "; finished the tables from the cached marches"
+               : table_shadows_from_cache_ ? "; marched the tables again from the cached shadows"
+                                           : "; built the tables again";
     for (const std::string& n : stores) notes += (notes.empty() ? "" : "; ") + n;
     table_cache_note_ = notes;
     table_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -164,8 +164,10 @@ const ThetaCells kThetaCells;
 float TableBsdf::cell_solid_angle(int i) { return kThetaCells.omega[size_t(i)]; }
 
 TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, int hits_per_view,
-                     int march_stride, Stage stage) {
+                     int march_stride, Stage stage, const TableBsdf* shadows_in,
+                     std::shared_ptr<const TableBsdf>* shadows_out) {
   const auto t0 = std::chrono::steady_clock::now();
+  if (stage == Stage::Shadows) throw std::logic_error("TableBsdf: stage Shadows comes from shadows_out");
   const KnitSurface& surface = material.surface();
   const k::KnitGeom& g = surface.geom();
   const CapmOptions& capm = material.params().capm_options;
@@ -174,7 +176,13 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
   const int stride = std::max(1, march_stride);
   const int marches = std::max(1, rays / stride);
   slots_ = classes_ = table.classes_present();
+  if (shadows_in && (shadows_in->stage() != Stage::Shadows || shadows_in->classes_ != classes_ ||
+                     shadows_in->marches_ != marches))
+    throw std::logic_error("TableBsdf: shadows_in is not the shadows of this table's geometry and settings");
   values_.assign(size_t(slots_) * kNodes * kNodes * kValues, 0);
+  // The shadows, read (shadows_in) or marched and kept (shadows_out).
+  std::vector<uint64_t> shadow_bits;
+  if (shadows_out && !shadows_in) shadow_bits.assign(size_t(slots_) * kNodes * size_t(marches) * kShadowWords, 0);
   std::array<Vec3, kNodes> light;
   for (int l = 0; l < kNodes; ++l) light[size_t(l)] = node_direction(l);
   // The pole rows are one direction each: their first column is computed,
@@ -211,15 +219,27 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
       ++hits;
       const YarnHitParts hp(material, st.hit, wo);
       const bool march = m < marches;  // the net's first points: stratified too
+      // (kept: every light node's shadow, whatever f is there, for other
+      // yarn parameters to use)
+      uint64_t* keep = march && !shadow_bits.empty()
+                           ? &shadow_bits[((size_t(slot) * kNodes + size_t(view)) * size_t(marches) + size_t(m)) *
+                                          kShadowWords]
+                           : nullptr;
       for (int l = 0; l < kNodes; ++l) {
         if (is_pole_copy(l)) continue;
         const Vec3 p = hp.parts(light[size_t(l)]);
-        if (!(p.x > 0 || p.y > 0 || p.z > 0)) continue;
+        const bool contributes = p.x > 0 || p.y > 0 || p.z > 0;
+        if (!contributes && !keep) continue;
         const double v[3] = {double(p.x), double(p.y), double(p.z)};
-        for (int c = 0; c < 3; ++c) all[size_t(l) * 3 + size_t(c)] += v[c];
+        if (contributes)
+          for (int c = 0; c < 3; ++c) all[size_t(l) * 3 + size_t(c)] += v[c];
         if (!march) continue;
+        const bool shadowed = shadows_in ? shadows_in->shadowed(slot, view, m, l)
+                                         : material.occluded_from(hp.base(), hp.shade(), light[size_t(l)], nullptr);
+        if (keep && shadowed) keep[size_t(l) / 64] |= uint64_t(1) << (l % 64);
+        if (!contributes) continue;
         for (int c = 0; c < 3; ++c) marched[size_t(l) * 3 + size_t(c)] += v[c];
-        if (material.occluded_from(hp.base(), hp.shade(), light[size_t(l)], nullptr)) continue;
+        if (shadowed) continue;
         for (int c = 0; c < 3; ++c) lit[size_t(l) * 3 + size_t(c)] += v[c];
       }
     }
@@ -245,6 +265,14 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
     std::copy(src, src + view_block, &values_[size_t(view) * view_block]);
     for (int slot = 0; slot < slots_; ++slot)
       hit_frac[size_t(slot) * kNodes + size_t(view)] = hit_frac[size_t(slot) * kNodes + size_t(view - view % kPhi)];
+  }
+  if (shadows_out) {
+    std::shared_ptr<TableBsdf> sh(new TableBsdf());
+    sh->slots_ = sh->classes_ = classes_;
+    sh->marches_ = marches;
+    sh->hit_frac_ = hit_frac;
+    sh->shadow_bits_ = shadows_in ? shadows_in->shadow_bits_ : std::move(shadow_bits);
+    *shadows_out = std::move(sh);
   }
   hit_frac_ = std::move(hit_frac);
   if (stage == Stage::Finished) finish(material, table);

@@ -7,11 +7,12 @@
 //   payload size (u64), payload     the FootprintTable, then a flag and the TableBsdf
 //   FNV-1a 64 of all bytes before   (u64)
 //
-// A material with a tabulated BSDF has two entries: its marches (the class
-// table and the TableBsdf's Marched stage, whose key leaves out the colours
-// and table_fold) and its finished tables (the key of the marches, the
-// colours and table_fold). Without a tabulated BSDF the class table holds
-// no colour and is the one entry, under the marches' key.
+// A material with a tabulated BSDF has three entries, one per stage of the
+// build (TableBsdf::Stage), each with the class table: its shadows (the
+// geometry's key), its marches (the yarn BSDF's and ply's parameters too)
+// and its finished tables (the colours and table_fold too); put_key says
+// what each holds. Without a tabulated BSDF the class table, which is
+// geometry alone, is the one entry, under the shadows' key.
 //
 // in the machine's own byte order (the build id in the key pins the
 // machine's kind). Every size is checked against what is left of the file
@@ -170,17 +171,22 @@ static_assert(sizeof(YarnBsdfParams) == 8 * sizeof(float) + 2 * sizeof(std::vect
               "YarnBsdfParams changed: update the key");
 static_assert(sizeof(Rgb) == 3 * sizeof(float), "Rgb changed: update the key");
 
-// The parameters of the material that the build does not read, and so are
-// not in the key: uv_scale (the tables are in pattern space), footprint_points,
+// The key of a stage holds what that stage and the ones before it read
+// (TableBsdf::Stage): the shadows the geometry (the pattern, the stitch,
+// the CAPM and self-shadowing switches and options) and the build's
+// settings; the marches also the yarn BSDF's and the ply's parameters; the
+// finished tables also the colours and table_fold. No key holds what no
+// stage reads: uv_scale (the tables are in pattern space), footprint_points,
 // table_min_cells but for whether it asks for sub-cells (ClassTableBuild::
 // sub_cells), near_field_below_cell (how a render picks its route) and the
-// mode (the tables are built for multi-scale materials only); and in the
-// marches' key the colours and table_fold, which only finishing reads.
+// mode (the tables are built for multi-scale materials only).
 // TableCache.TheTablesDoNotDependOnWhatTheKeyLeavesOut builds tables that
-// differ in each of them.
+// differ in each of those.
 void put_key(Writer& w, const KnitMaterial& m, const ClassTableBuild& b, TableBsdf::Stage stage) {
   w.put_string("knitshade class table, format 2");
-  w.put_string(stage == TableBsdf::Stage::Marched ? "marches" : "finished");
+  w.put_string(stage == TableBsdf::Stage::Shadows  ? "shadows"
+               : stage == TableBsdf::Stage::Marched ? "marches"
+                                                    : "finished");
   w.put_string(library_build_id());
   const KnitSurface& s = m.surface();
   w.put_string(KnitSurface::batch_isa_name(s.batch_isa(KnitSurface::BatchPath::Auto)));
@@ -197,6 +203,16 @@ void put_key(Writer& w, const KnitMaterial& m, const ClassTableBuild& b, TableBs
   w.put(p.stitch.h);
   w.put(p.stitch.d);
   w.put(p.stitch.r);
+  for (bool v : {p.capm, p.footprint_table, p.table_bsdf, p.self_shadowing}) w.put(uint8_t(v));
+  w.put(int32_t(p.capm_options.max_steps));
+  w.put(p.capm_options.max_segment);
+  w.put(p.capm_options.max_bend);
+  w.put(int32_t(b.rays_per_direction));
+  w.put(uint8_t(b.sub_cells));
+  w.put(uint8_t(b.table_bsdf));
+  w.put(int32_t(b.hits_per_view));
+  w.put(int32_t(b.march_stride));
+  if (stage == TableBsdf::Stage::Shadows) return;
   const YarnBsdfParams& y = p.bsdf;
   for (float v : {y.roughness_x, y.roughness_y, y.trans_roughness_x, y.trans_roughness_y, y.eta, y.body_energy,
                   y.body_reflect, y.optical_depth})
@@ -207,15 +223,7 @@ void put_key(Writer& w, const KnitMaterial& m, const ClassTableBuild& b, TableBs
   w.put(int32_t(p.ply.fiber_count));
   w.put(p.ply.fiber_twist);
   w.put(p.ply.yarn_radius);
-  for (bool v : {p.ply_detail, p.capm, p.footprint_table, p.table_bsdf, p.self_shadowing}) w.put(uint8_t(v));
-  w.put(int32_t(p.capm_options.max_steps));
-  w.put(p.capm_options.max_segment);
-  w.put(p.capm_options.max_bend);
-  w.put(int32_t(b.rays_per_direction));
-  w.put(uint8_t(b.sub_cells));
-  w.put(uint8_t(b.table_bsdf));
-  w.put(int32_t(b.hits_per_view));
-  w.put(int32_t(b.march_stride));
+  w.put(uint8_t(p.ply_detail));
   if (stage == TableBsdf::Stage::Marched) return;
   w.put(uint8_t(p.table_fold));
   w.put_vector(y.reflect_colors);
@@ -260,6 +268,8 @@ struct TableCacheCodec {
     io.vec(t.values_);
     io.vec(t.rows_);
     io.vec(t.hit_frac_);
+    io(t.marches_);
+    io.vec(t.shadow_bits_);
   }
   struct Put {
     Writer& w;
@@ -324,8 +334,9 @@ struct TableCacheCodec {
            std::all_of(t.sub_moments_.begin(), t.sub_moments_.end(),
                        [](uint16_t v) { return (v & 0x7f80u) != 0x7f80u; });
   }
-  // (and of the stage asked for: a marched table is neither folded nor has rows)
-  static bool get(Reader& r, TableBsdf& t, int classes, TableBsdf::Stage stage) {
+  // (and of the stage asked for: a marched table is neither folded nor has
+  // rows; shadows are bits of `marches` rays per view node, and no values)
+  static bool get(Reader& r, TableBsdf& t, int classes, TableBsdf::Stage stage, int marches) {
     Get io{r};
     bsdf_fields(io, t);
     t.seconds_ = 0;  // (built elsewhere)
@@ -333,12 +344,15 @@ struct TableCacheCodec {
     if (!r.ok() || cls != classes || slots < 1 || slots > TableBsdf::kMaxEntries || colours < 1) return false;
     if (t.folded_ ? slots != cls * colours : (slots != cls || colours != 1)) return false;
     const size_t n = size_t(TableBsdf::kNodes);
-    const bool marched = stage == TableBsdf::Stage::Marched;
-    if (marched && t.folded_) return false;
     // (the fold reads the hit fractions as weights: in [0, 1])
     if (t.hit_frac_.size() != n * size_t(cls) ||
         !std::all_of(t.hit_frac_.begin(), t.hit_frac_.end(), [](double v) { return v >= 0 && v <= 1; }))
       return false;
+    if (stage == TableBsdf::Stage::Shadows)
+      return !t.folded_ && t.values_.empty() && t.rows_.empty() && t.marches_ == marches &&
+             t.shadow_bits_.size() == size_t(cls) * n * size_t(marches) * TableBsdf::kShadowWords;
+    const bool marched = stage == TableBsdf::Stage::Marched;
+    if ((marched && t.folded_) || !t.shadow_bits_.empty() || t.marches_ != 0) return false;
     if (t.values_.size() != n * n * size_t(slots) * TableBsdf::kValues ||
         t.rows_.size() != (marched ? 0 : n * (TableBsdf::kTheta + 1) * size_t(slots) * 4))
       return false;
@@ -469,7 +483,7 @@ TableCacheUsage clear_table_cache(const std::string& dir) {
 ClassTableEntry class_table_entry(const KnitMaterial& material, const ClassTableBuild& build,
                                   const TableCacheSettings& settings, TableBsdf::Stage stage) {
   ClassTableEntry e;
-  e.stage = build.table_bsdf ? stage : TableBsdf::Stage::Marched;
+  e.stage = build.table_bsdf ? stage : TableBsdf::Stage::Shadows;
   if (settings.dir.empty() || library_build_id().empty()) return e;
   Writer w;
   put_key(w, material, build, e.stage);
@@ -513,7 +527,9 @@ DecodeResult decode_class_tables(const std::vector<unsigned char>& bytes, const 
   std::unique_ptr<TableBsdf> b;
   if (has_bsdf) {
     b.reset(TableCacheCodec::new_bsdf());
-    if (!TableCacheCodec::get(p, *b, t->classes_present(), stage)) return bad("does not hold its tabulated BSDF");
+    const int marches = std::max(1, std::max(1, build.hits_per_view) / std::max(1, build.march_stride));
+    if (!TableCacheCodec::get(p, *b, t->classes_present(), stage, marches))
+      return bad("does not hold its tabulated BSDF");
   }
   if (p.left() != 0) return bad("has bytes after its tables");
   table.reset(t.release());

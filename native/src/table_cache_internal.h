@@ -27,8 +27,8 @@ struct ClassTableBuild {
 // The entry of `material` and `build` in the cache folder for one stage
 // of the build (TableBsdf::Stage; table_cache.cpp): the key (empty when
 // nothing can be cached: no build id), the file's path and the stage of
-// the TableBsdf it holds (without build.table_bsdf, none: Marched, the
-// class table's only entry).
+// the TableBsdf it holds (without build.table_bsdf, none: Shadows, whose
+// key holds the geometry alone, the class table's only entry).
 struct ClassTableEntry {
   std::string key;
   std::string path;

@@ -1070,8 +1070,8 @@ class TableCacheTest(unittest.TestCase):
             self.assertFalse(first.table_from_cache)
             self.assertTrue(second.table_from_cache)
             self.assertEqual(first.table_cache_note, "")
-            # Two entries: the finished tables and their marches.
-            self.assertEqual(len(list(pathlib.Path(tmp).glob("*.knittable"))), 2)
+            # Three entries: the finished tables, their marches and their shadows.
+            self.assertEqual(len(list(pathlib.Path(tmp).glob("*.knittable"))), 3)
             self.assertLess(second.table_seconds, first.table_seconds)
             # Other colours: finished from the cached marches, not marched again.
             red = knitshade.KnitMaterial(stockinette, mode="multi_scale", uv_scale=1.0,
@@ -1080,6 +1080,12 @@ class TableCacheTest(unittest.TestCase):
             self.assertTrue(red.table_marches_from_cache)
             self.assertFalse(second.table_marches_from_cache)
             self.assertLess(red.table_seconds, first.table_seconds)
+            # Another roughness: marched from the cached shadows.
+            rough = knitshade.KnitMaterial(stockinette, mode="multi_scale", uv_scale=1.0,
+                                           bsdf={"roughness_x": 0.5})
+            self.assertFalse(rough.table_from_cache)
+            self.assertFalse(rough.table_marches_from_cache)
+            self.assertTrue(rough.table_shadows_from_cache)
             # Footprints of several cells, from the class table: the same shading.
             rng = np.random.default_rng(5)
             n = 64

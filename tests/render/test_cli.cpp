@@ -365,7 +365,7 @@ TEST(Cli, ClassTablesComeFromTheCacheTheSecondTime) {
     for (const auto& e : std::filesystem::directory_iterator(cache)) n += e.path().extension() == ".knittable";
     return n;
   };
-  EXPECT_EQ(count_entries(), 4);  // (each material's finished tables and their marches)
+  EXPECT_EQ(count_entries(), 6);  // (each material's finished tables, their marches and their shadows)
   const auto [r2, second] = render("second", "--cache-dir " + cache);
   EXPECT_EQ(second["knit_tables"]["built"], 0);
   EXPECT_EQ(second["knit_tables"]["from_cache"], 2);
@@ -402,7 +402,7 @@ TEST(Cli, ClassTablesComeFromTheCacheTheSecondTime) {
   EXPECT_EQ(rep4["knit_tables"]["finished_from_cached_marches"], 1);
   EXPECT_NE(r4.out.find("(1 of 2 from the cache, 1 finished from its marches)"), std::string::npos) << r4.out;
   EXPECT_LT(rep4["seconds"]["knit_tables"].get<double>(), 0.5 * first["seconds"]["knit_tables"].get<double>());
-  EXPECT_EQ(count_entries(), 5);
+  EXPECT_EQ(count_entries(), 7);
   ASSERT_EQ(run(dir, "render " + recoloured + " -o " + dir + "/recoloured_plain.exr --no-cache --quiet").code, 0);
   EXPECT_TRUE(exr_pixels(dir + "/recoloured.exr") == exr_pixels(dir + "/recoloured_plain.exr"));
   EXPECT_FALSE(exr_pixels(dir + "/recoloured.exr") == image);
@@ -448,10 +448,10 @@ TEST(Cli, ClassTablesComeFromTheCacheTheSecondTime) {
   test::write_file(cache, "notes.txt", "mine");
   const CliRun show = run(dir, "cache --dir " + cache);
   ASSERT_EQ(show.code, 0) << show.err;
-  EXPECT_NE(show.out.find("class-table cache " + cache + ": 5 entries, "), std::string::npos) << show.out;
+  EXPECT_NE(show.out.find("class-table cache " + cache + ": 7 entries, "), std::string::npos) << show.out;
   const CliRun clear = run(dir, "cache --dir " + cache + " --clear");
   ASSERT_EQ(clear.code, 0) << clear.err;
-  EXPECT_NE(clear.out.find("removed 5 entries"), std::string::npos) << clear.out;
+  EXPECT_NE(clear.out.find("removed 7 entries"), std::string::npos) << clear.out;
   EXPECT_NE(run(dir, "cache --dir " + cache).out.find(": 0 entries, 0.0 MiB"), std::string::npos);
   EXPECT_TRUE(std::filesystem::exists(cache + "/notes.txt"));
   // A folder that is not one: an error naming it; and usage errors.

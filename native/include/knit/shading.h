@@ -175,8 +175,13 @@ class KnitMaterial {
   // marches were (a material that differs from a cached one only in its
   // colours or table_fold), and were finished here (TableBsdf::finished,
   // hundredths of a second) rather than marched again.
+  // table_shadows_from_cache: neither were, but the tables' shadows were
+  // (a material that differs from a cached one in its yarn BSDF's or ply's
+  // parameters too): the yarn BSDF was evaluated at the view rays' hits
+  // again, with the cached shadows (about a third of a build).
   bool table_from_cache() const { return table_from_cache_; }
   bool table_marches_from_cache() const { return table_marches_from_cache_; }
+  bool table_shadows_from_cache() const { return table_shadows_from_cache_; }
   const std::string& table_cache_file() const { return table_cache_file_; }
   const std::string& table_cache_note() const { return table_cache_note_; }
   // The class table's tabulated BSDF (multi-scale with footprint_table and
@@ -237,7 +242,7 @@ class KnitMaterial {
   std::shared_ptr<const FootprintTable> table_;  // multi-scale with footprint_table: built at construction
   std::shared_ptr<const TableBsdf> table_bsdf_;  // with table_ when params_.table_bsdf
   double table_seconds_ = 0;  // what table_seconds() returns
-  bool table_from_cache_ = false, table_marches_from_cache_ = false;
+  bool table_from_cache_ = false, table_marches_from_cache_ = false, table_shadows_from_cache_ = false;
   std::string table_cache_file_, table_cache_note_;
   float arc_per_t_ = 1;     // mean arc length of the yarn per unit of curve parameter
   float mean_shadow_ = 1;   // ply shadow averaged around and along the yarn

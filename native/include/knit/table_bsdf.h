@@ -38,6 +38,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "knit/aggregate_table.h"
@@ -59,23 +60,48 @@ class TableBsdf {
   // shadow-marched there too: V enters as the lit share of f over those.
   // Every core.
   //
-  // The build has two stages. The marches (Stage::Marched) give values that
-  // hold none of the material's colours: the yarn BSDF's parts per body
-  // colour and the lit share. Finishing them (finished()) folds the walk in
-  // the palette's colours where table_fold applies, and sums the sampling
-  // rows; it is a few hundredths of the marches' time. The class-table
-  // cache keeps the two stages apart, so that a material which differs from
-  // a cached one only in its colours (or table_fold) is finished from the
-  // cached marches instead of marched again.
-  enum class Stage { Marched, Finished };
+  // The build has three stages, and the class-table cache keeps each, so
+  // that a material which differs from a cached one only in what a later
+  // stage reads starts from the cached earlier one:
+  // - Shadows: the view rays' first hits and the self-shadowing of the
+  //   first hits_per_view / march_stride rays' hits towards every light
+  //   node (whether the march met other yarn), and the share of each view's
+  //   rays that hit yarn: geometry only, none of the yarn BSDF's or ply's
+  //   parameters. Its marches are most of the build (61%).
+  // - Marched: the values, the yarn BSDF evaluated at the hits (the view
+  //   rays marched again, and the shadows read from a Shadows table when
+  //   one is given), which hold none of the material's colours (the parts
+  //   per body colour and the lit share).
+  // - Finished (finished()): the walk folded in the palette's colours where
+  //   table_fold applies, and the sampling rows; a few hundredths of the
+  //   build's time.
+  // `shadows_in`: a table of stage Shadows for this geometry (the same
+  // pattern, stitch and CAPM parameters and build settings), whose shadows
+  // are read instead of marched. `shadows_out`, when given, receives the
+  // build's shadows as a table of stage Shadows. Stage Shadows itself is
+  // not built here (its tables come from shadows_out).
+  enum class Stage { Shadows, Marched, Finished };
   TableBsdf(const KnitMaterial& material, const FootprintTable& table, int hits_per_view = 512,
-            int march_stride = 8, Stage stage = Stage::Finished);
+            int march_stride = 8, Stage stage = Stage::Finished, const TableBsdf* shadows_in = nullptr,
+            std::shared_ptr<const TableBsdf>* shadows_out = nullptr);
   // This table finished for `material`, which must be the material it was
   // marched for up to its colours and table_fold (the class-table cache's
   // key says which parameters those are), with `table` its class table.
-  // Throws std::logic_error when this table is already finished.
+  // Throws std::logic_error when this table is not of stage Marched.
   TableBsdf finished(const KnitMaterial& material, const FootprintTable& table) const;
-  Stage stage() const { return rows_.empty() ? Stage::Marched : Stage::Finished; }
+  Stage stage() const {
+    return values_.empty() ? Stage::Shadows : rows_.empty() ? Stage::Marched : Stage::Finished;
+  }
+  // Stage Shadows: whether the march from hit m (of the first rays) of view
+  // node `view`, class slot `slot`, towards light node `light` met other
+  // yarn; false for a ray that missed.
+  bool shadowed(int slot, int view, int m, int light) const {
+    const uint64_t w = shadow_bits_[((size_t(slot) * kNodes + size_t(view)) * size_t(marches_) + size_t(m)) *
+                                        kShadowWords + size_t(light) / 64];
+    return (w >> (light % 64)) & 1u;
+  }
+  int marches() const { return marches_; }
+  int classes() const { return classes_; }  // class slots (folded: entries are classes x colours)
 
   // A footprint's shading seen from wo (fabric frame, unit, either side):
   // the view nodes to mix, their weights, and the classes' shares of the
@@ -150,7 +176,7 @@ class TableBsdf {
 
   size_t bytes() const {
     return sizeof(*this) + values_.size() * sizeof(uint16_t) + rows_.size() * sizeof(float) +
-           hit_frac_.size() * sizeof(double);
+           hit_frac_.size() * sizeof(double) + shadow_bits_.size() * sizeof(uint64_t);
   }
   double build_seconds() const { return seconds_; }  // (0 when read from the class-table cache)
   // The tabulated A, Br, Bt (without V) and the lit share of entry `slot`
@@ -209,6 +235,11 @@ class TableBsdf {
   // Per class slot and view node, the share of the view rays that hit yarn
   // (the fold's weights of the classes met inside a footprint).
   std::vector<double> hit_frac_;
+  // Stage Shadows: [slot][view node][ray m < marches_][light node bits],
+  // shadowed() (else empty).
+  static constexpr size_t kShadowWords = (kNodes + 63) / 64;
+  int marches_ = 0;
+  std::vector<uint64_t> shadow_bits_;
   double seconds_ = 0;
 };
 

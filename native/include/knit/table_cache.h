@@ -3,9 +3,10 @@
 // the second render of a scene does not build them again (about 0.4-1.6 s
 // per material on 2 cores, docs/multiscale.md, "The class-table cache").
 //
-// A material has two entries, one per stage of the build (TableBsdf::Stage):
-// its marches and its finished tables, so that a material cached in other
-// colours is only finished. An entry is found by a key made of everything
+// A material has three entries, one per stage of the build (TableBsdf::
+// Stage): its shadows, its marches and its finished tables, so that a
+// material cached in other colours is only finished, and one cached with
+// other yarn parameters reuses the shadows. An entry is found by a key made of everything
 // its stage reads: the pattern, the material parameters that stage reads
 // (table_cache.cpp, put_key, names those it leaves out), the build's own
 // settings, the SIMD path that counts the layers and the GNU build id of
