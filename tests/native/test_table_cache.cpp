@@ -45,6 +45,34 @@ struct CacheScope {
   ~CacheScope() { set_table_cache({}); }
 };
 
+// Saves the variables the cache folder is picked from, and puts them back
+// at the end of the scope.
+class EnvScope {
+ public:
+  EnvScope() {
+    for (const char* n : {"KNITSHADE_CACHE_DIR", "XDG_CACHE_HOME", "HOME", "TMPDIR"}) {
+      const char* v = std::getenv(n);
+      saved_.push_back({n, v ? v : "", v != nullptr});
+    }
+  }
+  ~EnvScope() {
+    for (const Saved& e : saved_) {
+      if (e.had)
+        setenv(e.name, e.old.c_str(), 1);
+      else
+        unsetenv(e.name);
+    }
+  }
+
+ private:
+  struct Saved {
+    const char* name;
+    std::string old;
+    bool had;
+  };
+  std::vector<Saved> saved_;
+};
+
 // Multi-scale: one class (stockinette, one colour: the quick build) unless
 // a pattern and palette are given.
 KnitMaterialParams params(std::vector<Rgb> colours = {Rgb{0.7f, 0.2f, 0.1f}}, float r = 0.65f) {
@@ -161,16 +189,7 @@ TEST(TableCache, OffByDefaultAndItsDefaultFolder) {
 
   // default_table_cache_dir: $KNITSHADE_CACHE_DIR ("off": none), then
   // $XDG_CACHE_HOME (absolute only), then $HOME.
-  struct Env {
-    const char* name;
-    std::string old;
-    bool had;
-  };
-  std::vector<Env> saved;
-  for (const char* n : {"KNITSHADE_CACHE_DIR", "XDG_CACHE_HOME", "HOME"}) {
-    const char* v = std::getenv(n);
-    saved.push_back({n, v ? v : "", v != nullptr});
-  }
+  const EnvScope env;
   setenv("HOME", "/home/knitter", 1);
   setenv("XDG_CACHE_HOME", "/var/cache/me", 1);
   setenv("KNITSHADE_CACHE_DIR", "/tmp/tables", 1);
@@ -185,12 +204,6 @@ TEST(TableCache, OffByDefaultAndItsDefaultFolder) {
   EXPECT_EQ(default_table_cache_dir(), "/home/knitter/.cache/knitshade");
   unsetenv("HOME");
   EXPECT_EQ(default_table_cache_dir(), "");
-  for (const Env& e : saved) {
-    if (e.had)
-      setenv(e.name, e.old.c_str(), 1);
-    else
-      unsetenv(e.name);
-  }
 }
 
 TEST(TableCache, AHomeThatCannotBeWrittenFallsBackToAFolderOfTheUsersOwn) {
@@ -199,16 +212,7 @@ TEST(TableCache, AHomeThatCannotBeWrittenFallsBackToAFolderOfTheUsersOwn) {
   // the user's own. (These tests run as root, for whom permission bits do
   // not stop a write: a home under a file is one that cannot be made.)
   const fs::path dir = test_folder();
-  struct Env {
-    const char* name;
-    std::string old;
-    bool had;
-  };
-  std::vector<Env> saved;
-  for (const char* n : {"KNITSHADE_CACHE_DIR", "XDG_CACHE_HOME", "HOME", "TMPDIR"}) {
-    const char* v = std::getenv(n);
-    saved.push_back({n, v ? v : "", v != nullptr});
-  }
+  const EnvScope env;
   write_bytes(dir / "a_file", {'x'});
   fs::create_directories(dir / "tmp");
   unsetenv("KNITSHADE_CACHE_DIR");
@@ -243,12 +247,6 @@ TEST(TableCache, AHomeThatCannotBeWrittenFallsBackToAFolderOfTheUsersOwn) {
   EXPECT_EQ(writable_table_cache_dir(), (dir / "a_file" / "mine").string());
   setenv("KNITSHADE_CACHE_DIR", "off", 1);
   EXPECT_EQ(writable_table_cache_dir(), "");
-  for (const Env& e : saved) {
-    if (e.had)
-      setenv(e.name, e.old.c_str(), 1);
-    else
-      unsetenv(e.name);
-  }
 }
 
 TEST(TableCache, ABuildReportsItsProgressAndAReadDoesNot) {
