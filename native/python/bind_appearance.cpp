@@ -14,10 +14,13 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -25,6 +28,7 @@
 #include "knit/bsdf.h"
 #include "knit/ply_profile.h"
 #include "knit/shading.h"
+#include "knit/table_progress.h"
 
 namespace py = pybind11;
 
@@ -541,6 +545,53 @@ const char* mode_name(KnitMode m) {
   return m == KnitMode::MultiScale ? "multi_scale" : "near_field";
 }
 
+// knitshade.set_table_build_progress's callback (None: none), and the
+// observer that calls it: callback(done, total) in work units, at the
+// build's start and end and whenever a job ends on the thread that builds
+// (the one holding the GIL; knit/table_progress.h).
+::py::object& python_progress_callback() {
+  static ::py::object* callback = new ::py::object(::py::none());  // (never destroyed: outlives the interpreter's teardown order)
+  return *callback;
+}
+
+class PythonTableProgress : public TableBuildProgress {
+ public:
+  void begin(uint64_t total) override {
+    total_ = total;
+    done_ = 0;
+    call();
+  }
+  void add(uint64_t units) override {
+    done_ += units;
+    if (std::this_thread::get_id() == owner_) call();
+  }
+  void end() override {
+    done_ = total_;
+    call();
+  }
+  void rethrow() {
+    if (error_) {
+      std::exception_ptr e = error_;
+      error_ = nullptr;
+      std::rethrow_exception(e);
+    }
+  }
+
+ private:
+  void call() {
+    if (error_ || std::this_thread::get_id() != owner_) return;
+    try {
+      python_progress_callback()(uint64_t(done_), total_);
+    } catch (...) {  // (never through the build's jobs: kept for rethrow)
+      error_ = std::current_exception();
+    }
+  }
+  const std::thread::id owner_ = std::this_thread::get_id();
+  std::atomic<uint64_t> done_{0};
+  uint64_t total_ = 0;
+  std::exception_ptr error_;
+};
+
 KnitMaterial make_material(const Pattern& pattern, const StitchParams& stitch, ::py::object bsdf,
                            ::py::object ply, const std::string& mode, bool capm, bool ply_detail,
                            int footprint_points, bool footprint_table, double table_min_cells,
@@ -592,8 +643,21 @@ KnitMaterial make_material(const Pattern& pattern, const StitchParams& stitch, :
   mp.capm_options.max_steps = max_steps;
   mp.capm_options.max_segment = float(max_segment);
   mp.capm_options.max_bend = float(max_bend);
+  // A progress callback (knitshade.set_table_build_progress) is called
+  // from this thread only, which holds the GIL; the build's other threads
+  // only count. An exception it raises is kept, the build finished, and
+  // raised here.
+  PythonTableProgress progress;
+  TableBuildProgress* const before = table_build_progress();
+  if (!python_progress_callback().is_none()) set_table_build_progress(&progress);
+  struct Restore {
+    TableBuildProgress* p;
+    ~Restore() { set_table_build_progress(p); }
+  } restore{before};
   try {
-    return KnitMaterial(pattern, std::move(mp));
+    KnitMaterial m(pattern, std::move(mp));
+    progress.rethrow();
+    return m;
   } catch (const std::invalid_argument& e) {
     throw ::py::value_error(e.what());
   }
@@ -846,6 +910,21 @@ void def_hit_method(::py::class_<KnitMaterial>& cls, const char* name, Fn fn, co
 }  // namespace
 
 void bind_appearance(::py::module_& m) {
+  m.def(
+      "set_table_build_progress",
+      [](::py::object callback) {
+        if (!callback.is_none() && !PyCallable_Check(callback.ptr()))
+          throw ::py::type_error("set_table_build_progress: the callback must be callable or None");
+        python_progress_callback() = std::move(callback);
+      },
+      ::py::arg("callback"), R"doc(
+Call callback(done, total) while a multi-scale KnitMaterial builds its class
+tables (seconds, the first time a material is made; not when they come from
+the class-table cache): at the start (done 0), as the build's jobs end, and
+at the end (done == total). The units are the build's jobs, weighted as they
+cost. It is called on the thread that makes the material, with the GIL held;
+an exception it raises is raised by the constructor once the build is over.
+None (the default) turns it off.)doc");
   m.attr("BSDF_REFLECT") = int(kBsdfReflect);
   m.attr("BSDF_TRANSMIT") = int(kBsdfTransmit);
   m.attr("BSDF_DELTA") = int(kBsdfDelta);

@@ -32,7 +32,7 @@ again: a material whose pattern and parameters match an entry written by
 this same build of knitshade reads its tables instead of building them
 (KnitMaterial.table_from_cache), bit for bit the built ones. After each
 write the folder's entries are trimmed to max_bytes, least recently used
-first. knitshade.default_table_cache_dir() is the CLI's folder.)doc");
+first. knitshade.writable_table_cache_dir() is the CLI's folder.)doc");
   m.def(
       "table_cache",
       []() -> pybind11::object {
@@ -42,8 +42,9 @@ first. knitshade.default_table_cache_dir() is the CLI's folder.)doc");
       },
       "The class-table cache's folder, or None when it is off.");
   m.def("default_table_cache_dir", &knit::default_table_cache_dir, R"doc(
-The CLI's class-table cache folder: $KNITSHADE_CACHE_DIR ("off": none, returned
-as ""), else $XDG_CACHE_HOME/knitshade, else ~/.cache/knitshade.)doc");
+The preferred class-table cache folder: $KNITSHADE_CACHE_DIR ("off": none,
+returned as ""), else $XDG_CACHE_HOME/knitshade, else ~/.cache/knitshade (the
+CLI's, unless it cannot be written: writable_table_cache_dir).)doc");
   m.def("writable_table_cache_dir", &knit::writable_table_cache_dir, R"doc(
 The folder the CLI uses when none is given: default_table_cache_dir(), or where
 that is under $XDG_CACHE_HOME or $HOME and cannot be written (a read-only home),

@@ -1102,6 +1102,50 @@ class TableCacheTest(unittest.TestCase):
             third = knitshade.KnitMaterial(stockinette, mode="multi_scale", uv_scale=1.0)
             self.assertFalse(third.table_from_cache)
 
+    def test_build_progress_callback(self):
+        """knitshade.set_table_build_progress: (done, total) from 0 to total, never
+        decreasing, on the constructing thread; nothing for tables from the cache; an
+        exception in the callback raised by the constructor."""
+        import tempfile
+        import threading
+        stockinette = knitshade.Pattern.from_rows([[0]])
+        calls = []
+        me = threading.get_ident()
+
+        def record(done, total):
+            calls.append((done, total, threading.get_ident()))
+
+        try:
+            with tempfile.TemporaryDirectory() as tmp:
+                knitshade.set_table_cache(tmp)
+                knitshade.set_table_build_progress(record)
+                knitshade.KnitMaterial(stockinette, mode="multi_scale", uv_scale=1.0)
+                self.assertGreaterEqual(len(calls), 2)
+                total = calls[0][1]
+                self.assertEqual(total, 24 + 2 * 144)  # one class: its jobs' units
+                self.assertEqual(calls[0][0], 0)
+                self.assertEqual(calls[-1][:2], (total, total))
+                dones = [c[0] for c in calls]
+                self.assertEqual(dones, sorted(dones))
+                self.assertTrue(all(c[1] == total and c[2] == me for c in calls))
+                calls.clear()
+                second = knitshade.KnitMaterial(stockinette, mode="multi_scale", uv_scale=1.0)
+                self.assertTrue(second.table_from_cache)
+                self.assertEqual(calls, [])
+
+                def fail(done, total):
+                    raise RuntimeError("stop at %d of %d" % (done, total))
+
+                knitshade.set_table_build_progress(fail)
+                with self.assertRaisesRegex(RuntimeError, "stop at 0 of"):
+                    knitshade.KnitMaterial(stockinette, mode="multi_scale", uv_scale=1.0, footprint_points=8,
+                                           stitch=knitshade.StitchParams(r=0.6))
+                with self.assertRaises(TypeError):
+                    knitshade.set_table_build_progress(3)
+        finally:
+            knitshade.set_table_build_progress(None)
+            knitshade.set_table_cache(None)
+
     def test_bad_arguments(self):
         with self.assertRaises(ValueError):
             knitshade.set_table_cache("")
