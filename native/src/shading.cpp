@@ -114,10 +114,11 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
     build.table_bsdf = params_.table_bsdf;
     const TableCacheSettings cache = table_cache();
     const int rows = surface_.pattern().rows(), cols = surface_.pattern().cols();
-    // The finished tables, else their marches (the tables but for their
-    // colours, table_bsdf.h) finished here, else both built; what was built
-    // or finished is stored. Notes: the entries found damaged, then what was
-    // done instead; then the stores that failed.
+    // The finished tables from the cache, else the latest stage of the build
+    // that it holds (TableBsdf::Stage: the marches, then the shadows) and the
+    // stages after it made here, else the whole build; every stage made here
+    // is stored. Notes: the entries found damaged, then what was done
+    // instead; then the stores that failed.
     std::vector<std::string> damaged, stores;
     const auto load = [&](const ClassTableEntry& e, std::shared_ptr<const TableBsdf>& bsdf) {
       std::string note;
@@ -186,17 +187,14 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
           store(marches, marched.get());
         }
         table_bsdf_ = std::make_shared<const TableBsdf>(marched->finished(*this, *table_));
+        store(done, table_bsdf_.get());
       } else {
-        const ClassTableEntry shadows = class_table_entry(*this, build, cache, TableBsdf::Stage::Shadows);
-        std::shared_ptr<const TableBsdf> none;
-        if (shadows.path != done.path) table_from_cache_ = load(shadows, none);  // (the same entry: tried above)
-        if (!table_from_cache_) {
-          build_table();
-          scope.close();
-          store(shadows, nullptr);
-        }
+        // (the class table alone: geometry, so `done` is the shadows' entry,
+        // class_table_entry)
+        build_table();
+        scope.close();
+        store(done, nullptr);
       }
-      if (build.table_bsdf) store(done, table_bsdf_.get());
     }
     std::string notes;
     for (const std::string& n : damaged) notes += (notes.empty() ? "" : "; ") + n;
