@@ -318,6 +318,8 @@ void TableBsdf::finish(const KnitMaterial& material, const FootprintTable& table
         for (int c = 0; c < 4; ++c) total[c] += row_sums(view, i, slot)[c];
     }
   }
+  // (the hit fractions served the fold: a finished table keeps none)
+  hit_frac_ = std::vector<double>();
 }
 
 namespace {

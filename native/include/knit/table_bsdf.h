@@ -233,7 +233,8 @@ class TableBsdf {
   // (empty until the table is finished)
   std::vector<float> rows_;
   // Per class slot and view node, the share of the view rays that hit yarn
-  // (the fold's weights of the classes met inside a footprint).
+  // (the fold's weights of the classes met inside a footprint; empty once
+  // the table is finished).
   std::vector<double> hit_frac_;
   // Stage Shadows: [slot][view node][ray m < marches_][light node bits],
   // shadowed() (else empty).
