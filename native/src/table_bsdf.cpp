@@ -270,7 +270,6 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
     std::shared_ptr<TableBsdf> sh(new TableBsdf());
     sh->slots_ = sh->classes_ = classes_;
     sh->marches_ = marches;
-    sh->hit_frac_ = hit_frac;
     sh->shadow_bits_ = shadows_in ? shadows_in->shadow_bits_ : std::move(shadow_bits);
     *shadows_out = std::move(sh);
   }
@@ -280,7 +279,7 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
 }
 
 TableBsdf TableBsdf::finished(const KnitMaterial& material, const FootprintTable& table) const {
-  if (stage() != Stage::Marched) throw std::logic_error("TableBsdf::finished: the table is finished already");
+  if (stage() != Stage::Marched) throw std::logic_error("TableBsdf::finished: the table is not of stage Marched");
   const auto t0 = std::chrono::steady_clock::now();
   TableBsdf t = *this;
   t.finish(material, table);

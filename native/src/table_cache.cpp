@@ -344,9 +344,9 @@ struct TableCacheCodec {
     if (!r.ok() || cls != classes || slots < 1 || slots > TableBsdf::kMaxEntries || colours < 1) return false;
     if (t.folded_ ? slots != cls * colours : (slots != cls || colours != 1)) return false;
     const size_t n = size_t(TableBsdf::kNodes);
-    // (the fold reads the hit fractions as weights: in [0, 1]; a finished
-    // table keeps none)
-    if (t.hit_frac_.size() != (stage == TableBsdf::Stage::Finished ? 0 : n * size_t(cls)) ||
+    // (the fold reads the hit fractions as weights: in [0, 1]; only a
+    // marched table keeps them)
+    if (t.hit_frac_.size() != (stage == TableBsdf::Stage::Marched ? n * size_t(cls) : 0) ||
         !std::all_of(t.hit_frac_.begin(), t.hit_frac_.end(), [](double v) { return v >= 0 && v <= 1; }))
       return false;
     if (stage == TableBsdf::Stage::Shadows)

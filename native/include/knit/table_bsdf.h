@@ -65,9 +65,9 @@ class TableBsdf {
   // stage reads starts from the cached earlier one:
   // - Shadows: the view rays' first hits and the self-shadowing of the
   //   first hits_per_view / march_stride rays' hits towards every light
-  //   node (whether the march met other yarn), and the share of each view's
-  //   rays that hit yarn: geometry only, none of the yarn BSDF's or ply's
-  //   parameters. Its marches are most of the build (61%).
+  //   node (whether the march met other yarn): geometry only, none of the
+  //   yarn BSDF's or ply's parameters. Its marches are most of the build
+  //   (61%).
   // - Marched: the values, the yarn BSDF evaluated at the hits (the view
   //   rays marched again, and the shadows read from a Shadows table when
   //   one is given), which hold none of the material's colours (the parts
