@@ -66,6 +66,11 @@ int run(const std::vector<std::string>& args) {
   std::printf("class-table cache %s: %llu entries, %s (trimmed to %s)\n", dir.c_str(),
               static_cast<unsigned long long>(u.entries), mib(u.bytes).c_str(),
               mib(TableCacheSettings{}.max_bytes).c_str());
+  // (a material has three entries, one per stage of its build: docs/renderer.md)
+  const uint64_t other = u.entries - u.finished - u.marches - u.shadows;
+  std::printf("  %llu finished tables, %llu marches, %llu shadows%s\n", static_cast<unsigned long long>(u.finished),
+              static_cast<unsigned long long>(u.marches), static_cast<unsigned long long>(u.shadows),
+              other ? (", " + std::to_string(other) + " of another format").c_str() : "");
   return 0;
 }
 

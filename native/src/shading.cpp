@@ -197,13 +197,13 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
       }
     }
     std::string notes;
-    for (const std::string& n : damaged) notes += (notes.empty() ? "" : "; ") + n;
+    for (const std::string& d : damaged) notes += (notes.empty() ? "" : "; ") + d;
     if (!damaged.empty())
       notes += table_from_cache_           ? ""
                : table_marches_from_cache_ ? "; finished the tables from the cached marches"
                : table_shadows_from_cache_ ? "; marched the tables again from the cached shadows"
                                            : "; built the tables again";
-    for (const std::string& n : stores) notes += (notes.empty() ? "" : "; ") + n;
+    for (const std::string& f : stores) notes += (notes.empty() ? "" : "; ") + f;
     table_cache_note_ = notes;
     table_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }

@@ -53,6 +53,7 @@ std::mutex g_mutex;
 TableCacheSettings g_settings;  // dir empty: off
 
 constexpr char kMagic[8] = {'K', 'N', 'I', 'T', 'T', 'B', 'L', '1'};
+constexpr const char* kKeyFormat = "knitshade class table, format 2";  // a key's first string
 constexpr uint64_t kMaxEntryBytes = uint64_t(1) << 30;  // (a table is a few MiB at most)
 
 uint64_t fnv1a(const unsigned char* p, size_t n, uint64_t h = 0xcbf29ce484222325ull) {
@@ -183,7 +184,7 @@ static_assert(sizeof(Rgb) == 3 * sizeof(float), "Rgb changed: update the key");
 // TableCache.TheTablesDoNotDependOnWhatTheKeyLeavesOut builds tables that
 // differ in each of those.
 void put_key(Writer& w, const KnitMaterial& m, const ClassTableBuild& b, TableBsdf::Stage stage) {
-  w.put_string("knitshade class table, format 2");
+  w.put_string(kKeyFormat);
   w.put_string(stage == TableBsdf::Stage::Shadows  ? "shadows"
                : stage == TableBsdf::Stage::Marched ? "marches"
                                                     : "finished");
@@ -459,11 +460,38 @@ void for_each_entry(const std::string& dir, Visit&& visit) {
 }
 }  // namespace
 
+namespace {
+// The stage named by an entry's key (put_key: the format's name, then the
+// stage's), from the file's first bytes; "" when they are not of this format.
+std::string entry_stage(const fs::path& path) {
+  unsigned char head[256] = {};
+  std::ifstream in(path, std::ios::binary);
+  in.read(reinterpret_cast<char*>(head), sizeof head);
+  Reader r(head, size_t(in.gcount()));
+  char magic[sizeof kMagic] = {};
+  for (char& c : magic) r.get(c);
+  uint64_t key_size = 0, len = 0;
+  r.get(key_size);
+  std::string strings[2];
+  for (std::string& s : strings) {
+    if (!r.get(len) || len > r.left()) return {};
+    s.resize(size_t(len));
+    for (char& c : s) r.get(c);
+  }
+  if (!r.ok() || std::memcmp(magic, kMagic, sizeof kMagic) != 0 || strings[0] != kKeyFormat) return {};
+  return strings[1];
+}
+}  // namespace
+
 TableCacheUsage table_cache_usage(const std::string& dir) {
   TableCacheUsage u;
-  for_each_entry(dir, [&](const fs::path&, uint64_t size, fs::file_time_type) {
+  for_each_entry(dir, [&](const fs::path& path, uint64_t size, fs::file_time_type) {
     ++u.entries;
     u.bytes += size;
+    const std::string stage = entry_stage(path);
+    u.finished += stage == "finished";
+    u.marches += stage == "marches";
+    u.shadows += stage == "shadows";
   });
   return u;
 }

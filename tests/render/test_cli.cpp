@@ -449,6 +449,8 @@ TEST(Cli, ClassTablesComeFromTheCacheTheSecondTime) {
   const CliRun show = run(dir, "cache --dir " + cache);
   ASSERT_EQ(show.code, 0) << show.err;
   EXPECT_NE(show.out.find("class-table cache " + cache + ": 7 entries, "), std::string::npos) << show.out;
+  // By stage: each material's three entries, and the recoloured material's finished tables.
+  EXPECT_NE(show.out.find("  3 finished tables, 2 marches, 2 shadows\n"), std::string::npos) << show.out;
   const CliRun clear = run(dir, "cache --dir " + cache + " --clear");
   ASSERT_EQ(clear.code, 0) << clear.err;
   EXPECT_NE(clear.out.find("removed 7 entries"), std::string::npos) << clear.out;

@@ -64,8 +64,12 @@ inline constexpr const char* kTableCacheExtension = ".knittable";
 // says what it removed. Both also remove the temporaries of interrupted
 // writes once they are an hour old, and throw std::runtime_error naming the
 // folder when it cannot be read, or an entry that cannot be removed.
+// table_cache_usage also counts the entries by the stage their key names
+// (read from each file's first bytes; an entry whose key is not of this
+// format, or cannot be read, is in `entries` alone).
 struct TableCacheUsage {
   uint64_t entries = 0, bytes = 0;
+  uint64_t finished = 0, marches = 0, shadows = 0;
 };
 TableCacheUsage table_cache_usage(const std::string& dir);
 TableCacheUsage clear_table_cache(const std::string& dir);
