@@ -217,6 +217,7 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
       }
     }
   };
+  static_assert(kClassTableJobsPerClass == kThetaBins, "table_build_units counts a job per theta bin");
   TableBuildProgress* const progress = table_build_progress();
   tbb::parallel_for(0, kClasses * kThetaBins, [&](int job) {
     const int cls = job / kThetaBins, it = job % kThetaBins;

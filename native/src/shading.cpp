@@ -147,8 +147,7 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
       if (progress) {
         int classes = 0;
         for (const auto& list : FootprintTable::class_cells(surface_)) classes += !list.empty();
-        progress->begin(uint64_t(classes) * (FootprintTable::kThetaBins * kClassTableJobUnits +
-                                             (build.table_bsdf ? TableBsdf::kNodes * kTableBsdfJobUnits : 0)));
+        progress->begin(table_build_units(classes, true, build.table_bsdf));
         scope.open = true;
       }
       table_ = std::make_shared<const FootprintTable>(surface_, params_.capm_options, build.rays_per_direction,
@@ -171,7 +170,7 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
           table_shadows_from_cache_ = load(shadows, cached_shadows);
           if (table_shadows_from_cache_) {
             if (progress) {
-              progress->begin(uint64_t(table_->classes_present()) * TableBsdf::kNodes * kTableBsdfJobUnits);
+              progress->begin(table_build_units(table_->classes_present(), false, true));
               scope.open = true;
             }
             marched = std::make_shared<const TableBsdf>(*this, *table_, build.hits_per_view, build.march_stride,

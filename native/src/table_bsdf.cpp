@@ -189,6 +189,7 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
   // the others copy it (views) or its values (lights).
   const auto is_pole_copy = [](int node) { return (node / kPhi == 0 || node / kPhi == kTheta - 1) && node % kPhi; };
   std::vector<double> hit_frac(size_t(slots_) * kNodes, 0.0);  // per slot and view node: hits / rays
+  static_assert(kTableBsdfJobsPerClass == kNodes, "table_build_units counts a job per view node");
   TableBuildProgress* const progress = table_build_progress();
   tbb::parallel_for(0, slots_ * kNodes, [&](int job) {
     const int slot = job / kNodes, view = job % kNodes;

@@ -54,6 +54,10 @@ TableCacheSettings g_settings;  // dir empty: off
 
 constexpr char kMagic[8] = {'K', 'N', 'I', 'T', 'T', 'B', 'L', '1'};
 constexpr const char* kKeyFormat = "knitshade class table, format 2";  // a key's first string
+// A key's second string: its stage's name.
+const char* stage_name(TableBsdf::Stage stage) {
+  return stage == TableBsdf::Stage::Shadows ? "shadows" : stage == TableBsdf::Stage::Marched ? "marches" : "finished";
+}
 constexpr uint64_t kMaxEntryBytes = uint64_t(1) << 30;  // (a table is a few MiB at most)
 
 uint64_t fnv1a(const unsigned char* p, size_t n, uint64_t h = 0xcbf29ce484222325ull) {
@@ -185,9 +189,7 @@ static_assert(sizeof(Rgb) == 3 * sizeof(float), "Rgb changed: update the key");
 // differ in each of those.
 void put_key(Writer& w, const KnitMaterial& m, const ClassTableBuild& b, TableBsdf::Stage stage) {
   w.put_string(kKeyFormat);
-  w.put_string(stage == TableBsdf::Stage::Shadows  ? "shadows"
-               : stage == TableBsdf::Stage::Marched ? "marches"
-                                                    : "finished");
+  w.put_string(stage_name(stage));
   w.put_string(library_build_id());
   const KnitSurface& s = m.surface();
   w.put_string(KnitSurface::batch_isa_name(s.batch_isa(KnitSurface::BatchPath::Auto)));
@@ -489,9 +491,9 @@ TableCacheUsage table_cache_usage(const std::string& dir) {
     ++u.entries;
     u.bytes += size;
     const std::string stage = entry_stage(path);
-    u.finished += stage == "finished";
-    u.marches += stage == "marches";
-    u.shadows += stage == "shadows";
+    u.finished += stage == stage_name(TableBsdf::Stage::Finished);
+    u.marches += stage == stage_name(TableBsdf::Stage::Marched);
+    u.shadows += stage == stage_name(TableBsdf::Stage::Shadows);
   });
   return u;
 }

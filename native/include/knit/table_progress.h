@@ -27,8 +27,16 @@ class TableBuildProgress {
 void set_table_build_progress(TableBuildProgress* progress);
 TableBuildProgress* table_build_progress();
 
-// Units of each build job (see above).
+// Units of each build job (see above), and of a build for `classes`
+// classes present that builds the class table and/or the tabulated BSDF's
+// marches (FootprintTable::kThetaBins and TableBsdf::kNodes jobs per class).
 inline constexpr uint64_t kClassTableJobUnits = 1;
 inline constexpr uint64_t kTableBsdfJobUnits = 2;
+inline constexpr uint64_t kClassTableJobsPerClass = 24;
+inline constexpr uint64_t kTableBsdfJobsPerClass = 144;
+inline constexpr uint64_t table_build_units(int classes, bool class_table, bool table_bsdf) {
+  return uint64_t(classes) * ((class_table ? kClassTableJobsPerClass * kClassTableJobUnits : 0) +
+                              (table_bsdf ? kTableBsdfJobsPerClass * kTableBsdfJobUnits : 0));
+}
 
 }  // namespace knit
