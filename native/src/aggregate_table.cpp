@@ -101,6 +101,14 @@ FootprintTable::ClassCells FootprintTable::class_cells(const KnitSurface& surfac
   return cells;
 }
 
+std::array<double, FootprintTable::kClasses> FootprintTable::class_cell_counts() const {
+  std::array<size_t, 256> n{};
+  for (unsigned char c : class_of_) ++n[c];
+  std::array<double, kClasses> counts{};
+  for (int i = 0; i < kClasses; ++i) counts[size_t(i)] = double(n[size_t(i)]);
+  return counts;
+}
+
 Vec3 FootprintTable::ray_origin(const k::KnitGeom& g, const std::pair<int, int>& cell, int node, int rays, int m,
                                 int* sub) {
   // The point inside the cell from a (0,2)-net: each run of 4^j of its

@@ -288,18 +288,25 @@ TableBsdf TableBsdf::finished(const KnitMaterial& material, const FootprintTable
   return t;
 }
 
+std::vector<double> TableBsdf::cell_shares(const FootprintTable& table) {
+  // (counted over the whole pattern: the sample of class_cells, which the
+  // build's rays start from, holds at most 1024 cells of a class, and its
+  // sizes gave a large pattern's classes wrong weights)
+  const std::array<double, FootprintTable::kClasses> counts = table.class_cell_counts();
+  std::vector<double> share(size_t(table.classes_present()), 0.0);
+  double all = 0;
+  for (int slot = 0; slot < table.classes_present(); ++slot) {
+    share[size_t(slot)] = counts[size_t(table.class_of_slot(slot))];
+    all += share[size_t(slot)];
+  }
+  for (double& c : share) c /= std::max(all, 1.0);
+  return share;
+}
+
 void TableBsdf::finish(const KnitMaterial& material, const FootprintTable& table) {
   const int palette = table.one_colour() ? 1 : material.params().bsdf.num_colors();
   if (material.params().table_fold && classes_ * palette <= kMaxEntries) {
-    const FootprintTable::ClassCells cells = FootprintTable::class_cells(material.surface());
-    std::vector<double> cell_share(size_t(slots_), 0.0);
-    double cells_all = 0;
-    for (int slot = 0; slot < slots_; ++slot) {
-      cell_share[size_t(slot)] = double(cells[size_t(table.class_of_slot(slot))].size());
-      cells_all += cell_share[size_t(slot)];
-    }
-    for (double& c : cell_share) c /= std::max(cells_all, 1.0);
-    fold(material, palette, cell_share, hit_frac_);
+    fold(material, palette, cell_shares(table), hit_frac_);
   }
   rows_.assign(size_t(slots_) * kNodes * (kTheta + 1) * 4, 0.0f);
   const auto row_sums = [&](int view, int i, int slot) {

@@ -53,7 +53,10 @@ std::mutex g_mutex;
 TableCacheSettings g_settings;  // dir empty: off
 
 constexpr char kMagic[8] = {'K', 'N', 'I', 'T', 'T', 'B', 'L', '1'};
-constexpr const char* kKeyFormat = "knitshade class table, format 2";  // a key's first string
+// A key's first string. Format 3 (2026-12-02): a finished table weighs its
+// classes by their cells counted over the whole pattern (format 2 counted a
+// sample of at most 1024 per class).
+constexpr const char* kKeyFormat = "knitshade class table, format 3";
 // A key's second string: its stage's name.
 const char* stage_name(TableBsdf::Stage stage) {
   return stage == TableBsdf::Stage::Shadows ? "shadows" : stage == TableBsdf::Stage::Marched ? "marches" : "finished";

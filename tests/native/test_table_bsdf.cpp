@@ -7,12 +7,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <random>
 #include <utility>
 #include <vector>
 
+#include "knit/aggregate_table.h"
 #include "knit/shading.h"
 
 namespace {
@@ -399,6 +401,35 @@ TEST(TableBsdf, FoldedTableOfAWhiteYarnConservesEnergy) {
     EXPECT_GT(folded, lit);
     EXPECT_LT(folded, total);
   }
+}
+
+// The fold weighs the classes of the yarn a footprint meets by their share
+// of the cells: counted over the whole pattern, also where a class has more
+// cells than the 1024 the build samples its rays from (it once took the
+// sample's sizes, which gave this 64 x 48 pattern's plain knit cells
+// 1024 / 1534 of the weight instead of 2562 / 3072).
+TEST(TableBsdf, ClassSharesCountEveryCellOfALargePattern) {
+  std::vector<std::vector<int>> rows(48, std::vector<int>(64, 0));
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 64; ++c) rows[size_t(r)][size_t(c)] = 1;  // four purl rows
+  for (int r = 4; r < 48; ++r) rows[size_t(r)][size_t((r * 7) % 64)] = 1;  // and a purl cell in every other
+  KnitSurface s(Pattern::from_rows(rows), StitchParams{});
+  const FootprintTable table(s, CapmOptions{}, 4);
+  // the cells of each class, counted here one by one
+  std::array<double, FootprintTable::kClasses> count{};
+  for (int k = 0; k < s.geom().rows; ++k)
+    for (int c = 0; c < s.geom().cols; ++c) count[size_t(FootprintTable::cell_class(s, k, c))] += 1;
+  const double largest = *std::max_element(count.begin(), count.end());
+  ASSERT_GT(largest, 1024.0) << "the pattern must have a class larger than the build's sample";
+  const std::vector<double> share = TableBsdf::cell_shares(table);
+  ASSERT_EQ(int(share.size()), table.classes_present());
+  double sum = 0;
+  for (int slot = 0; slot < table.classes_present(); ++slot) {
+    EXPECT_NEAR(share[size_t(slot)], count[size_t(table.class_of_slot(slot))] / (48.0 * 64.0), 1e-12)
+        << "class " << table.class_of_slot(slot);
+    sum += share[size_t(slot)];
+  }
+  EXPECT_NEAR(sum, 1.0, 1e-12);
 }
 
 TEST(TableBsdf, BuiltOnlyWithTheClassTableAndTableBsdf) {

@@ -145,6 +145,9 @@ class FootprintTable {
   // all of them, or a uniform sample of 1024 for a large pattern.
   using ClassCells = std::array<std::vector<std::pair<int, int>>, kClasses>;
   static ClassCells class_cells(const KnitSurface& surface);
+  // How many cells of each class the pattern holds: all of them, where
+  // class_cells keeps a sample of a large pattern's.
+  std::array<double, kClasses> class_cell_counts() const;
   // Where ray m of `rays` for direction node `node` enters cell `cell`
   // (pattern x, y; z 0): a (0,2)-net over the cell, different per node;
   // `sub`, when given, receives its sub-cell.

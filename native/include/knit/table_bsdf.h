@@ -189,6 +189,10 @@ class TableBsdf {
   // interpolation) over the sphere, kNodes x kNodes, symmetric: the fold's
   // quadrature weights. Computed once.
   static const std::vector<double>& sphere_overlaps();
+  // Per class slot of `table`, its share of the pattern's cells (all of
+  // them counted, however large the pattern), as the fold weighs the
+  // classes of the yarn a footprint meets.
+  static std::vector<double> cell_shares(const FootprintTable& table);
 
  private:
   friend struct TableCacheCodec;  // reads and writes the state below (src/table_cache.cpp)
