@@ -56,6 +56,10 @@
 #if defined(__x86_64__) && defined(__GNUC__)
 #define KNIT_HAVE_SIMD_PATHS 1
 #include <immintrin.h>
+#ifdef KNIT_QUERY_STAGE_PROFILE
+#include <x86intrin.h>  // (__rdtsc: the stage clock of query_batch_stages.inc)
+#include <cstdio>
+#endif
 #else
 #define KNIT_HAVE_SIMD_PATHS 0
 #endif
