@@ -83,9 +83,13 @@ void mixed_sums(const TableBsdf::Mix& m, int slots, Block block, Entry entry, st
 }
 
 // A node's (or a sum of nodes') sampling value: its four stored values
-// weighed by the mix's sw.
+// weighed by the mix's sw. Folded, sw is 0, 0, 0, 1 and the value the
+// fourth itself, the same number (the others finite), at one operation.
 float sampling_value(const TableBsdf::Mix& m, const F4& v) {
   return m.sw[0] * v[0] + m.sw[1] * v[1] + m.sw[2] * v[2] + m.sw[3] * v[3];
+}
+float sampling_value(bool folded, const TableBsdf::Mix& m, const F4& v) {
+  return folded ? v[3] : sampling_value(m, v);
 }
 
 // The heaviest of a direction's four bilinear corners (the first of equal
@@ -327,6 +331,27 @@ void TableBsdf::finish(const KnitMaterial& material, const FootprintTable& table
   }
   // (the hit fractions served the fold: a finished table keeps none)
   hit_frac_ = std::vector<double>();
+  derive_sampling();
+}
+
+void TableBsdf::derive_sampling() {
+  static_assert(kTheta + 1 <= 16 && kPhi == 12, "srows_ holds four groups of rows, snodes_ three of nodes");
+  srows_.clear();
+  snodes_.clear();
+  if (!folded_ || rows_.empty()) return;
+  const size_t S = size_t(slots_);
+  srows_.assign(size_t(kNodes) * 4 * S * 4, 0.0f);
+  snodes_.assign(size_t(kNodes) * kTheta * 3 * S * 4, 0.0f);
+  for (int view = 0; view < kNodes; ++view)
+    for (size_t slot = 0; slot < S; ++slot) {
+      for (int i = 0; i <= kTheta; ++i)
+        srows_[((size_t(view) * 4 + size_t(i / 4)) * S + slot) * 4 + size_t(i % 4)] = rows_at(view, i)[slot * 4 + 3];
+      for (int l = 0; l < kNodes; ++l) {
+        const int i = l / kPhi, j = l % kPhi;
+        snodes_[(((size_t(view) * kTheta + size_t(i)) * 3 + size_t(j / 4)) * S + slot) * 4 + size_t(j % 4)] =
+            value(int(slot), view, l)[3];
+      }
+    }
 }
 
 namespace {
@@ -571,6 +596,15 @@ void TableBsdf::remix(Mix& m, Vec3 wo, float u_view) const {
   }
   // The sampling rows, once per shading point (sample and pdf read them):
   // the view node's rows of every class lie together.
+  if (!srows_.empty()) {
+    // Folded: the sampling values alone, four rows a vector.
+    std::array<F4, 4> sum;
+    mixed_sums(
+        m, slots_, [&](int view) { return &srows_[size_t(view) * 4 * size_t(slots_) * 4]; },
+        [](const float* p, int i) { return load4(p + 4 * i); }, sum);
+    for (int i = 0; i <= kTheta; ++i) m.rows[size_t(i)] = sum[size_t(i / 4)][i % 4];
+    return;
+  }
   std::array<F4, kTheta + 1> sum;
   mixed_sums(
       m, slots_, [&](int view) { return rows_at(view, 0); }, [](const float* p, int i) { return load4(p + 4 * i); },
@@ -609,7 +643,7 @@ Vec3 TableBsdf::eval(const Mix& m, Vec3 wi, Vec3 kd_r, Vec3 kd_t, Vec3* total, f
     const F4 f = (lit0 + lit1) + (lit2 + lit3);
     const Vec3 r = k::kv3(f[0], f[1], f[2]);
     if (total) *total = r;
-    if (density_out) *density_out = density_from(m, sampling_value(m, nq));
+    if (density_out) *density_out = density_from(m, nq[3]);  // (sampling_value, folded)
     return r;
   }
   for (int t = 0; t < m.n; ++t) {
@@ -649,7 +683,7 @@ float TableBsdf::node_value(const Mix& m, int l) const {
   mixed_sums(
       m, slots_, [&](int view) { return at(view, l); },
       [](const uint16_t* p, int i) { return bf16x4(p + kValues * i); }, v);
-  return sampling_value(m, v[0]);
+  return sampling_value(folded_, m, v[0]);
 }
 
 float TableBsdf::pdf(const Mix& m, Vec3 wi) const { return density(m, sphere_nodes(wi, kTheta, kPhi)); }
@@ -677,17 +711,27 @@ bool TableBsdf::sample(const Mix& m, float u0, float u1, float u2, Vec3& wi, flo
       target -= r;
     }
     // The row's node values in one pass over each term's contiguous row
-    // (its nodes, each with its classes).
-    std::array<F4, kPhi> row;
-    mixed_sums(
-        m, slots_, [&](int view) { return at(view, i * kPhi); },
-        [](const uint16_t* p, int k) { return bf16x4(p + kValues * k); }, row);
+    // (its nodes, each with its classes); folded, the sampling values
+    // alone, four nodes a vector.
+    std::array<float, kPhi> nv;
+    if (!snodes_.empty()) {
+      std::array<F4, kPhi / 4> row;
+      mixed_sums(
+          m, slots_, [&](int view) { return &snodes_[(size_t(view) * kTheta + size_t(i)) * 3 * size_t(slots_) * 4]; },
+          [](const float* p, int k) { return load4(p + 4 * k); }, row);
+      for (int j = 0; j < kPhi; ++j) nv[size_t(j)] = row[size_t(j / 4)][j % 4];
+    } else {
+      std::array<F4, kPhi> row;
+      mixed_sums(
+          m, slots_, [&](int view) { return at(view, i * kPhi); },
+          [](const uint16_t* p, int k) { return bf16x4(p + kValues * k); }, row);
+      for (int j = 0; j < kPhi; ++j) nv[size_t(j)] = sampling_value(m, row[size_t(j)]);
+    }
     const float om = cell_solid_angle(i);
     int j = 0;
     float v = 0;
     for (; j < kPhi; ++j) {
-      const F4& r = row[size_t(j)];
-      v = sampling_value(m, r) * om;
+      v = nv[size_t(j)] * om;
       if (target < v || j == kPhi - 1) break;
       target -= v;
     }

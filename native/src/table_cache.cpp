@@ -365,8 +365,11 @@ struct TableCacheCodec {
       return false;
     // Values finite and >= 0, as the build stores them: a bfloat16's sign
     // bit clear and its exponent not all ones.
-    return std::all_of(t.values_.begin(), t.values_.end(), [](uint16_t v) { return (v & 0xff80u) < 0x7f80u; }) &&
-           std::all_of(t.rows_.begin(), t.rows_.end(), [](float v) { return std::isfinite(v) && v >= 0; });
+    if (!std::all_of(t.values_.begin(), t.values_.end(), [](uint16_t v) { return (v & 0xff80u) < 0x7f80u; }) ||
+        !std::all_of(t.rows_.begin(), t.rows_.end(), [](float v) { return std::isfinite(v) && v >= 0; }))
+      return false;
+    t.derive_sampling();  // (what finish derives, not stored)
+    return true;
   }
   static FootprintTable* new_table() { return new FootprintTable(); }
   static TableBsdf* new_bsdf() { return new TableBsdf(); }

@@ -175,7 +175,8 @@ class TableBsdf {
   int colours() const { return colours_; }
 
   size_t bytes() const {
-    return sizeof(*this) + values_.size() * sizeof(uint16_t) + rows_.size() * sizeof(float) +
+    return sizeof(*this) + values_.size() * sizeof(uint16_t) +
+           (rows_.size() + srows_.size() + snodes_.size()) * sizeof(float) +
            hit_frac_.size() * sizeof(double) + shadow_bits_.size() * sizeof(uint64_t);
   }
   double build_seconds() const { return seconds_; }  // (0 when read from the class-table cache)
@@ -213,6 +214,10 @@ class TableBsdf {
   // The finishing stage (finished()): the fold where it applies, then the
   // sampling rows.
   void finish(const KnitMaterial& material, const FootprintTable& table);
+  // Folded and finished: srows_ and snodes_ from rows_ and values_ (after
+  // finish, and after the class-table cache has read a table); otherwise
+  // clears them.
+  void derive_sampling();
 
   static constexpr int kValues = 4;
   int slots_ = 0;  // entries per node pair
@@ -236,6 +241,14 @@ class TableBsdf {
   // angle, and over all rows (sample, pdf; four floats for four lanes).
   // (empty until the table is finished)
   std::vector<float> rows_;
+  // Folded (sampling weights 0, 0, 0, 1): the sampling values alone, the
+  // fourth stored value, four lanes of rows or nodes at a time, so that
+  // remix and sample sum a quarter of the vectors. srows_: [view node][row
+  // group g < 4][slot][row 4 g + lane], rows 0..kTheta of rows_ (lanes
+  // past kTheta zero); snodes_: [view node][theta row][node group g < 3]
+  // [slot][the row's node 4 g + lane], of values_. Derived, not cached.
+  // (empty otherwise)
+  std::vector<float> srows_, snodes_;
   // Per class slot and view node, the share of the view rays that hit yarn
   // (the fold's weights of the classes met inside a footprint; empty once
   // the table is finished).
