@@ -341,7 +341,7 @@ void TableBsdf::derive_sampling() {
   if (!folded_ || rows_.empty()) return;
   const size_t S = size_t(slots_);
   srows_.assign(size_t(kNodes) * 4 * S * 4, 0.0f);
-  snodes_.assign(size_t(kNodes) * kTheta * 3 * S * 4, 0.0f);
+  snodes_.assign(size_t(kNodes) * kTheta * 3 * S * 4, 0);
   for (int view = 0; view < kNodes; ++view)
     for (size_t slot = 0; slot < S; ++slot) {
       for (int i = 0; i <= kTheta; ++i)
@@ -349,7 +349,7 @@ void TableBsdf::derive_sampling() {
       for (int l = 0; l < kNodes; ++l) {
         const int i = l / kPhi, j = l % kPhi;
         snodes_[(((size_t(view) * kTheta + size_t(i)) * 3 + size_t(j / 4)) * S + slot) * 4 + size_t(j % 4)] =
-            value(int(slot), view, l)[3];
+            at(view, l)[slot * kValues + 3];
       }
     }
 }
@@ -718,7 +718,7 @@ bool TableBsdf::sample(const Mix& m, float u0, float u1, float u2, Vec3& wi, flo
       std::array<F4, kPhi / 4> row;
       mixed_sums(
           m, slots_, [&](int view) { return &snodes_[(size_t(view) * kTheta + size_t(i)) * 3 * size_t(slots_) * 4]; },
-          [](const float* p, int k) { return load4(p + 4 * k); }, row);
+          [](const uint16_t* p, int k) { return bf16x4(p + 4 * k); }, row);
       for (int j = 0; j < kPhi; ++j) nv[size_t(j)] = row[size_t(j / 4)][j % 4];
     } else {
       std::array<F4, kPhi> row;

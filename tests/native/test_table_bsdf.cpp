@@ -350,9 +350,10 @@ TEST(TableBsdf, FoldedTableHoldsEachColoursWalk) {
   ASSERT_TRUE(fold->folded());
   ASSERT_EQ(fold->colours(), 2);
   // Twice the values and rows (an entry per colour), and the folded
-  // table's sampling values for remix and sample: 4 x 4 rows and 12 x 12
-  // nodes per view node and entry.
-  const size_t sampling = size_t(TableBsdf::kNodes) * 2 * (4 * 4 + TableBsdf::kTheta * 12) * sizeof(float);
+  // table's sampling values for remix and sample: 4 x 4 rows (floats) and
+  // 12 x 12 nodes (bfloat16) per view node and entry.
+  const size_t sampling =
+      size_t(TableBsdf::kNodes) * 2 * (4 * 4 * sizeof(float) + TableBsdf::kTheta * 12 * sizeof(uint16_t));
   EXPECT_EQ(fold->bytes() - sizeof(TableBsdf), 2 * (walk->bytes() - sizeof(TableBsdf)) + sampling);
   const float first[2] = {1, 0}, second[2] = {0, 1};
   double worst = 0;

@@ -176,7 +176,7 @@ class TableBsdf {
 
   size_t bytes() const {
     return sizeof(*this) + values_.size() * sizeof(uint16_t) +
-           (rows_.size() + srows_.size() + snodes_.size()) * sizeof(float) +
+           (rows_.size() + srows_.size()) * sizeof(float) + snodes_.size() * sizeof(uint16_t) +
            hit_frac_.size() * sizeof(double) + shadow_bits_.size() * sizeof(uint64_t);
   }
   double build_seconds() const { return seconds_; }  // (0 when read from the class-table cache)
@@ -246,9 +246,10 @@ class TableBsdf {
   // remix and sample sum a quarter of the vectors. srows_: [view node][row
   // group g < 4][slot][row 4 g + lane], rows 0..kTheta of rows_ (lanes
   // past kTheta zero); snodes_: [view node][theta row][node group g < 3]
-  // [slot][the row's node 4 g + lane], of values_. Derived, not cached.
-  // (empty otherwise)
-  std::vector<float> srows_, snodes_;
+  // [slot][the row's node 4 g + lane], of values_ (bfloat16, as stored
+  // there). Derived, not cached. (empty otherwise)
+  std::vector<float> srows_;
+  std::vector<uint16_t> snodes_;
   // Per class slot and view node, the share of the view rays that hit yarn
   // (the fold's weights of the classes met inside a footprint; empty once
   // the table is finished).
