@@ -35,6 +35,12 @@ def main():
     print(" ".join(cmd))
     r = subprocess.run(cmd, capture_output=True, text=True)
     print(r.stdout + r.stderr)
+    if 'Unable to find "stdosl.h"' in r.stdout + r.stderr:
+        # An oslc run from its build tree, not installed: the kernel was not
+        # looked at (every later error follows from the missing header).
+        print(f"FAIL: {oslc} cannot find OSL's stdosl.h; set OSLHOME to the folder holding shaders/stdosl.h "
+              "(an installed OSL's prefix, or its source tree's src). The kernel was NOT checked.")
+        return 1
     if r.returncode != 0 or not os.path.exists(oso):
         print("FAIL: the kernel does not compile as OSL")
         return 1
