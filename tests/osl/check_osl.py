@@ -72,7 +72,11 @@ def main():
             values.setdefault(pix, {})[name.strip()] = float(val)
     pattern = knitshade.Pattern.from_rows([[0, 1], [1, 0]], colors=[[0, 0], [1, 1]])
     surf = knitshade.KnitSurface(pattern, knitshade.StitchParams(1.5, 4.0, 1.0, 0.65))
-    bad = bad_pd = 0
+    # kernel_smoke's CAPM: curvature 0.02 along x (a cylinder of radius 50),
+    # segments of at most 1, at most 32 steps.
+    wi = np.array([0.5, 0.2, 0.8]) / np.linalg.norm([0.5, 0.2, 0.8])
+    cylinder = knitshade.CylinderFrame(50.0)
+    bad = bad_pd = bad_c = hits_c = 0
     for (x, y), v in sorted(values.items()):
         # testshade's u, v run from 0 at the first pixel to 1 at the last
         uu, vv = 20.0 * x / (res - 1), 20.0 * y / (res - 1)
@@ -81,14 +85,23 @@ def main():
         if abs(zq - v["zq"]) > 2e-3:
             print(f"pixel {x},{y}: query z OSL {v['zq']} C++ {zq}")
             bad += 1
+        c = surf.capm(np.array([uu]), np.array([vv]), wi, frame=cylinder, max_segment=1.0, max_steps=32)
+        zc = float(c["position"][0][2]) if c["hit"][0] else -1.0
+        hits_c += 1 if c["hit"][0] else 0
+        if abs(zc - v["zc"]) > 2e-3:
+            print(f"pixel {x},{y}: CAPM z OSL {v['zc']} C++ {zc}")
+            bad_c += 1
         a = surf.aggregate(uu, vv, np.array([6.0, 0.0]), np.array([0.0, 6.0]), np.array([0.0, 0.0, 1.0]),
                            n_points=16, shift_x=0.3, shift_y=0.6)
         if abs(float(a["p_delta"][0]) - v["pd"]) > 1e-6:
             print(f"pixel {x},{y}: aggregate p_delta OSL {v['pd']} C++ {float(a['p_delta'][0])}")
             bad_pd += 1
     print(f"{len(values)} pixels compared: {bad} mismatches in the vertical query, "
-          f"{bad_pd} in the multi-scale p_delta")
-    return 1 if bad or bad_pd else 0
+          f"{bad_c} in the curved CAPM ({hits_c} hits), {bad_pd} in the multi-scale p_delta")
+    if not values or hits_c == 0 or hits_c == len(values):
+        print("FAIL: the comparison saw no pixels, or CAPM hits or misses only")
+        return 1
+    return 1 if bad or bad_c or bad_pd else 0
 
 
 if __name__ == "__main__":
