@@ -144,6 +144,58 @@ void piece_interpolant_xy(double a, double h, int j, double q[6]) {
   q[5] = 2 * (ny[0] - 2 * ny[1] + ny[2]);
 }
 
+// The per-surface constants of the batched query (pattern-independent: the
+// x and y of knit and purl yarns) as plain floats, per piece place j = 0..7
+// (16 a table, the rest zero), from which each instruction set makes its
+// vectors (make_consts, query_batch_stages.inc): the pieces' xy box offsets
+// (knit_piece_offsets_xy), the xy interpolant relative to (t0, y_k), its
+// chord q1 + q2, 1 / |chord|^2 (0 if none), |q2| / 4, and the unit vector
+// along q2's part across the chord (0 if none; knit_quad_beyond's
+// `across`). They depend on a and h alone and are kept per thread for the
+// next call with the same ones, one copy for every instruction set (the
+// 32-lane closest points' included): 24 double-precision sines and cosines
+// are a third of the time of a call with one point.
+struct PieceTables {
+  alignas(64) float oxl[16], oxh[16], oyl[16], oyh[16];
+  alignas(64) float q0x[16], q0y[16], q1x[16], q1y[16], q2x[16], q2y[16];
+  alignas(64) float cx[16], cy[16], il2[16], hq2[16], acx[16], acy[16];
+};
+
+const PieceTables& piece_tables(const k::KnitGeom& g) {
+  static thread_local float pt_a = 0.0f, pt_h = 0.0f;
+  static thread_local PieceTables t;
+  if (pt_a == g.a && pt_h == g.h) return t;
+  t = PieceTables{};
+  for (int j = 0; j < 8; ++j) {
+    const k::KBox o = k::knit_piece_offsets_xy(g, j);
+    t.oxl[j] = o.lo.x;
+    t.oxh[j] = o.hi.x;
+    t.oyl[j] = o.lo.y;
+    t.oyh[j] = o.hi.y;
+    double q[6];
+    piece_interpolant_xy(g.a, g.h, j, q);
+    t.q0x[j] = float(q[0]);
+    t.q0y[j] = float(q[1]);
+    t.q1x[j] = float(q[2]);
+    t.q1y[j] = float(q[3]);
+    t.q2x[j] = float(q[4]);
+    t.q2y[j] = float(q[5]);
+    t.cx[j] = t.q1x[j] + t.q2x[j];
+    t.cy[j] = t.q1y[j] + t.q2y[j];
+    const float l2 = t.cx[j] * t.cx[j] + t.cy[j] * t.cy[j];
+    t.il2[j] = l2 > 0.0f ? 1.0f / l2 : 0.0f;
+    t.hq2[j] = 0.25f * std::sqrt(t.q2x[j] * t.q2x[j] + t.q2y[j] * t.q2y[j]);
+    const double along = double(t.q2x[j] * t.cx[j] + t.q2y[j] * t.cy[j]) * t.il2[j];
+    const double ax = t.q2x[j] - along * t.cx[j], ay = t.q2y[j] - along * t.cy[j];
+    const double la = std::sqrt(ax * ax + ay * ay);
+    t.acx[j] = la > 0 ? float(ax / la) : 0.0f;
+    t.acy[j] = la > 0 ? float(ay / la) : 0.0f;
+  }
+  pt_a = g.a;
+  pt_h = g.h;
+  return t;
+}
+
 // Stage 1's candidates by where a point lies in its stitch cell. Which
 // (row, piece) pairs can come near a vertical line depends on the line's
 // place within one period of the geometry (2 pi in x, a row spacing s in
