@@ -24,7 +24,10 @@ summary) to OUT_DIR.
                   geometry, shading data and Embree BVH.
   overhead        the knit model against a plain diffuse material of the same
                   colour on the same mesh and lights, same samples (64),
-                  rendered in turn three times: the ratio of the fastest,
+                  rendered in turn three times (--repeats N: N times): the
+                  ratio of the fastest, of the medians, and the median of
+                  the ratios of each knit render to the diffuse one right
+                  after it (the two of a pair share the machine's phase),
                   and the same with set-up, cold and warm.
   instructions    (not in the default set) the same pairs at the same size
                   (so the same footprints) and 2 spp on one thread, counted
@@ -33,6 +36,7 @@ summary) to OUT_DIR.
                   minutes.
 
   /usr/bin/python3 scripts/bench_knit.py BUILD_DIR OUT_DIR [--quick] [--paper-far-view] [--only PARTS]
+                                        [--repeats N]
 
 PARTS: comma-separated, of half_cylinder, garment, garment_alone, far_view,
 overhead (all by default), instructions (only when named; --paper-far-view
@@ -226,7 +230,9 @@ class Bench:
     def overhead(self, name, scene, spp, repeats=3):
         """Render time of the scene against the same scene with its knit materials replaced by diffuse ones
         of their first yarn colour. The two are rendered in turn `repeats` times (the same seed, so the same
-        images); the ratio is of the fastest of each, the least disturbed by the rest of the machine."""
+        images); the ratio is of the fastest of each, the least disturbed by the rest of the machine. On a
+        shared VM whose speed drifts over minutes, each knit render and the diffuse one right after it
+        share a phase: the median of those pairs' ratios is given too, with their range."""
         print(f"overhead: {name}", flush=True)
         diffuse = diffuse_twin(scene)
         tk, td, sk, sd = [], [], [], []
@@ -237,9 +243,11 @@ class Bench:
             td.append(rd["seconds"]["render"])
             sk.append(setup_seconds(rk))
             sd.append(setup_seconds(rd))
+        pairs = [k / d for k, d in zip(tk, td)]
         res = {"spp": spp, "knit_seconds": min(tk), "diffuse_seconds": min(td), "ratio": min(tk) / min(td),
                "knit_seconds_all": tk, "diffuse_seconds_all": td,
                "ratio_of_medians": sorted(tk)[len(tk) // 2] / sorted(td)[len(td) // 2],
+               "pair_ratios": pairs, "ratio_of_pairs_median": median(pairs),
                "knit_rays": rk["rays"]["total"], "diffuse_rays": rd["rays"]["total"], "knit": rk["knit"],
                # Whole renders, set-up included: the first knit render builds its class tables (cold),
                # the later ones read them from the cache (warm).
@@ -248,7 +256,8 @@ class Bench:
         if len(sk) > 1:
             res["ratio_with_setup_warm"] = (min(tk) + min(sk[1:])) / (min(td) + min(sd))
         print(f"  -> knit {res['knit_seconds']:.2f} s, diffuse {res['diffuse_seconds']:.2f} s (fastest of "
-              f"{len(tk)}), ratio {res['ratio']:.2f} (of medians {res['ratio_of_medians']:.2f}); with set-up, "
+              f"{len(tk)}), ratio {res['ratio']:.2f} (of medians {res['ratio_of_medians']:.2f}; pairs' median "
+              f"{res['ratio_of_pairs_median']:.2f}, {min(pairs):.2f}-{max(pairs):.2f}); with set-up, "
               f"cold {res['ratio_with_setup_cold']:.2f} (knit {sk[0]:.2f} s, diffuse {min(sd):.2f} s)"
               + (f", warm {res['ratio_with_setup_warm']:.2f}" if len(sk) > 1 else ""), flush=True)
         return res
@@ -290,6 +299,13 @@ def setup_seconds(report):
     return sec["total"] - sec["render"] - sec["write"]
 
 
+def median(values):
+    """The median (the mean of the middle two for an even count)."""
+    v = sorted(values)
+    n = len(v)
+    return v[n // 2] if n % 2 else 0.5 * (v[n // 2 - 1] + v[n // 2])
+
+
 def diffuse_twin(scene):
     """The scene with its knit materials replaced by diffuse ones of their first yarn colour."""
     diffuse = json.loads(json.dumps(scene))
@@ -314,6 +330,14 @@ def main():
     parts = {"half_cylinder", "garment", "garment_alone", "far_view", "overhead"}
     if "--only" in sys.argv:
         parts = set(sys.argv[sys.argv.index("--only") + 1].split(","))
+    repeats = 3
+    if "--repeats" in sys.argv:
+        try:
+            repeats = int(sys.argv[sys.argv.index("--repeats") + 1])
+        except (IndexError, ValueError):
+            sys.exit("bench_knit: --repeats takes a whole number of rounds (1 or more)")
+        if repeats < 1:
+            sys.exit(f"bench_knit: --repeats {repeats}: give 1 or more rounds")
     size = 64 if quick else 128
     ladder = [1, 2, 4, 8, 16] if quick else [1, 2, 4, 8, 16, 32, 64]
     ref_spp = 128 if quick else 1024
@@ -417,7 +441,7 @@ def main():
     if "overhead" in parts:
         # 64 spp: the diffuse renders then take about a second, not a tenth.
         oh = 16 if quick else 64
-        b.results["overhead"] = {key: b.overhead(tag, sc, oh) for key, (tag, sc) in overhead_scenes.items()}
+        b.results["overhead"] = {key: b.overhead(tag, sc, oh, repeats) for key, (tag, sc) in overhead_scenes.items()}
     # 4b. The same pairs in instructions (only when asked for: callgrind is slow).
     if "instructions" in parts:
         if shutil.which("valgrind") is None:
