@@ -255,9 +255,10 @@ TableBsdf::TableBsdf(const KnitMaterial& material, const FootprintTable& table, 
       uint16_t* out = &values_[((size_t(view) * kNodes + size_t(l)) * size_t(slots_) + size_t(slot)) * kValues];
       for (int c = 0; c < 3; ++c) out[c] = bf16(float(std::max(0.0, all[src + size_t(c)] * inv)));
       // The lit share of f over the marched hits (a ratio estimator: the
-      // shadows' marches are 95% of the build, the BSDF's evaluations cheap
-      // and their variance high), one for the three parts, weighed as a
-      // grey yarn's colours would weigh them.
+      // shadows' marches, on an eighth of the hits, are still two thirds of
+      // the build's instructions, the BSDF's evaluations on all of them a
+      // quarter, and those have the variance), one for the three parts,
+      // weighed as a grey yarn's colours would weigh them.
       const double m = marched[src] + 0.5 * (marched[src + 1] + marched[src + 2]);
       const double v = lit[src] + 0.5 * (lit[src + 1] + lit[src + 2]);
       out[3] = bf16(float(m > 0 ? std::clamp(v / m, 0.0, 1.0) : 1.0));
