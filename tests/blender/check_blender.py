@@ -32,8 +32,8 @@ STITCH = dict(a=1.25, h=3.0, d=-0.6, r=0.4)
 
 
 def reference(surface):
-    """What in_blender.py computes, here: vertical queries on a grid over two
-    repeats and CAPM marches from a slanted view."""
+    """Vertical queries on a grid over two repeats and CAPM marches from a
+    slanted view: computed here, and again by in_blender.py inside Blender."""
     n = 48
     xs, ys = np.meshgrid(np.linspace(-3.0, 30.0, n), np.linspace(-2.0, 16.0, n))
     u, v = xs.ravel(), ys.ravel()
@@ -61,8 +61,6 @@ def main():
     env = dict(os.environ)
     env["KNIT_PYTHON_DIR"] = os.path.dirname(knitshade.__file__)
     env["KNIT_BLENDER_OUT"] = out
-    env["KNIT_BLENDER_PATTERN"] = PATTERN
-    env["KNIT_BLENDER_STITCH"] = ",".join(f"{k}={v!r}" for k, v in STITCH.items())
     # --python-exit-code must come before --python: a failing script then
     # ends Blender with status 1 instead of 0.
     cmd = [blender, "-b", "--factory-startup", "--python-exit-code", "1", "--python",
