@@ -56,17 +56,17 @@ def main():
     if not ref["q_hit"].any() or ref["q_hit"].all() or not ref["c_hit"].any():
         print("FAIL: the reference grid saw only hits or only misses; it would not compare anything")
         return 1
-    out = tempfile.mkdtemp(prefix="knit-blender-")
-    np.savez(os.path.join(out, "reference.npz"), **ref)
-    env = dict(os.environ)
-    env["KNIT_PYTHON_DIR"] = os.path.dirname(knitshade.__file__)
-    env["KNIT_BLENDER_OUT"] = out
-    # --python-exit-code must come before --python: a failing script then
-    # ends Blender with status 1 instead of 0.
-    cmd = [blender, "-b", "--factory-startup", "--python-exit-code", "1", "--python",
-           os.path.join(HERE, "in_blender.py")]
-    print(" ".join(cmd))
-    r = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300)
+    with tempfile.TemporaryDirectory(prefix="knit-blender-") as out:
+        np.savez(os.path.join(out, "reference.npz"), **ref)
+        env = dict(os.environ)
+        env["KNIT_PYTHON_DIR"] = os.path.dirname(knitshade.__file__)
+        env["KNIT_BLENDER_OUT"] = out
+        # --python-exit-code must come before --python: a failing script
+        # then ends Blender with status 1 instead of 0.
+        cmd = [blender, "-b", "--factory-startup", "--python-exit-code", "1", "--python",
+               os.path.join(HERE, "in_blender.py")]
+        print(" ".join(cmd))
+        r = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300)
     lines = [ln for ln in (r.stdout + r.stderr).splitlines() if ln.startswith(("knit:", "Traceback", "  ", "Error"))
              or "Error" in ln]
     print("\n".join(lines))
