@@ -246,7 +246,7 @@ class Bench:
         pairs = [k / d for k, d in zip(tk, td)]
         res = {"spp": spp, "knit_seconds": min(tk), "diffuse_seconds": min(td), "ratio": min(tk) / min(td),
                "knit_seconds_all": tk, "diffuse_seconds_all": td,
-               "ratio_of_medians": sorted(tk)[len(tk) // 2] / sorted(td)[len(td) // 2],
+               "ratio_of_medians": median(tk) / median(td),
                "pair_ratios": pairs, "ratio_of_pairs_median": median(pairs),
                "knit_rays": rk["rays"]["total"], "diffuse_rays": rd["rays"]["total"], "knit": rk["knit"],
                # Whole renders, set-up included: the first knit render builds its class tables (cold),

@@ -67,8 +67,8 @@ def main():
                os.path.join(HERE, "in_blender.py")]
         print(" ".join(cmd))
         r = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300)
-    lines = [ln for ln in (r.stdout + r.stderr).splitlines() if ln.startswith(("knit:", "Traceback", "  ", "Error"))
-             or "Error" in ln]
+    lines = [ln for ln in (r.stdout + r.stderr).splitlines()
+             if ln.startswith(("knit:", "Traceback", "  ")) or "Error" in ln]
     print("\n".join(lines))
     if r.returncode != 0 or "knit: all checks passed" not in r.stdout:
         print(f"FAIL: Blender exited with {r.returncode}")
