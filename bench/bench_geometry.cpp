@@ -129,7 +129,7 @@ void BM_VerticalQueryBatchSmall(benchmark::State& state) {
                                                benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.SetLabel(KnitSurface::batch_isa_name(s.batch_isa(path)));
 }
-BENCHMARK(BM_VerticalQueryBatchSmall)->ArgsProduct({{1, 2, 4, 16}, {0, 1, 2}});
+BENCHMARK(BM_VerticalQueryBatchSmall)->ArgsProduct({{1, 2, 4, 16, 32, 48, 64, 128, 256}, {0, 1, 2}});
 
 // The kernel call alone (no SurfaceHit conversion, no layer count).
 void BM_KernelLineQuery(benchmark::State& state) {

@@ -131,8 +131,8 @@ class PyKnitSurface {
     HitArrays out(P.n);
     ::py::array_t<double> z(P.n);
     double* pz = z.mutable_data();
-    // Ranges of points through KnitSurface::query_batch (16 at a time with
-    // AVX-512, 8 with AVX2, where the CPU has it), in pieces of at most kQueryBlock; the
+    // Ranges of points through KnitSurface::query_batch (32 or 16 at a time
+    // with AVX-512, 8 with AVX2, where the CPU has it), in pieces of at most kQueryBlock; the
     // ranges on every core from kParallelRows points up.
     constexpr ssize_t kQueryBlock = 1024;
     for_each_range(P.n, kQueryBlock, [&](ssize_t begin, ssize_t end) {

@@ -1,5 +1,5 @@
-// KnitSurface::query_batch: vertical queries at many points, 16 at a time
-// with AVX-512 or 8 at a time with AVX2, whichever the CPU has.
+// KnitSurface::query_batch: vertical queries at many points, 32 or 16 at a
+// time with AVX-512 or 8 at a time with AVX2, whichever the CPU has.
 //
 // The vertical query of query.h (knit_vertical_query) taken apart into
 // stages, each run over a vector of lanes at once:
@@ -43,10 +43,16 @@
 // and query_batch_avx2.inc (8 lanes, masks as vectors; compress and expand
 // by permutation tables) each provide; the file is compiled once per
 // instruction set, in its own namespace, and the CPU picks one at run time.
-// The AVX-512 path runs stage 2 over 32 lanes, two registers side by side
-// (query_batch_avx512x2.inc, a third compilation of the stages with that
-// stage alone): its chains of dependent operations are long, and two of
-// them interleaved take a fifth off its time on Zen 4.
+// The AVX-512 path runs its calls of kWideMin points or more over 32 lanes,
+// two registers side by side (query_batch_avx512x2.inc, a third
+// compilation of the stages): the chains of dependent operations of the
+// closest points and the entry searches are long, and two of them
+// interleaved take 14% off the whole batch on an Intel Xeon with AVX-512
+// (a fifth off the closest points on Zen 4, where the other stages gain
+// nothing). Smaller calls run the 16-lane stages, whose vectors the few
+// points fill better, with the 32-lane closest points; both give the same
+// results bit for bit, so a point's result does not depend on how many
+// points it is asked with.
 #include <algorithm>
 #include <climits>
 #include <cmath>
@@ -123,6 +129,9 @@ struct Work {
 };
 constexpr float kBig = 1.0e30f;
 constexpr int kBlock = 1024;  // points per pass through the stages
+// The fewest points a call takes the AVX-512 path's 32 lanes for (below
+// it the 16-lane stages are as fast or faster: BM_VerticalQueryBatchSmall)
+constexpr int kWideMin = 128;
 
 // The x and y of the quadratic interpolant of piece place j (0..7) of a
 // knit or purl row, in double: q0 + q1 u + q2 u^2 for u in [0, 1] through
@@ -368,13 +377,11 @@ const CandidateBins& candidate_bins(const k::KnitGeom& g) {
 #endif
 #define KNIT_TARGET_STR(x) #x
 
-// Stage 2 over 32 lanes (two AVX-512 registers), for the AVX-512 path.
+// The stages over 32 lanes (two AVX-512 registers), for the AVX-512 path.
 namespace avx512x2 {
 KNIT_TARGET_BEGIN("avx512f,avx512dq,fma,avx2,bmi,bmi2,popcnt")
-#define KNIT_STAGES_CLOSEST_POINTS_ONLY
 #include "query_batch_avx512x2.inc"
 #include "query_batch_stages.inc"
-#undef KNIT_STAGES_CLOSEST_POINTS_ONLY
 void closest_points_wide(const k::KnitGeom& g, const float* xb, const float* yb, int ncand, Work& wk) {
   closest_points(g, batch_consts(g), xb, yb, ncand, wk);
 }
@@ -445,7 +452,10 @@ void KnitSurface::query_batch(const float* x, const float* y, size_t n, SurfaceH
   const BatchIsa isa = batch_isa(path);
 #if KNIT_HAVE_SIMD_PATHS
   if (isa == BatchIsa::Avx512) {
-    avx512::query_all(*this, x, y, n, out);
+    if (n >= size_t(kWideMin))
+      avx512x2::query_all(*this, x, y, n, out);
+    else
+      avx512::query_all(*this, x, y, n, out);
     return;
   }
   if (isa == BatchIsa::Avx2) {

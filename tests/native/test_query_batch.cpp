@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <string>
@@ -161,6 +162,66 @@ TEST(QueryBatch, AlternatingStitchesKeepTheirOwnConstants) {
     }
     EXPECT_GE(b_agree, long(n) - 2);    // the second stitch's results are its own
     EXPECT_GT(differ_ab, long(n) / 2);  // and the two stitches do differ
+  }
+}
+
+// A point's result must not depend on how many points are asked with it:
+// the AVX-512 path runs calls of 128 points or more over 32 lanes and
+// smaller ones over 16 (query_batch.cpp), and Python's query cuts its
+// arrays into blocks, so the same point meets both. Every field, bit for
+// bit, one call of all the points against calls of sizes on both sides of
+// that threshold, for each vector path this CPU has.
+TEST(QueryBatch, ResultsDoNotDependOnTheCallSize) {
+  if (!KnitSurface::batch_simd_available())
+    GTEST_SKIP() << "this CPU has neither AVX-512 nor AVX2 with FMA: no vector path to check";
+  std::vector<KnitSurface::BatchPath> paths = {KnitSurface::BatchPath::Simd};
+  if (KnitSurface::batch_best_isa() == KnitSurface::BatchIsa::Avx512) paths.push_back(KnitSurface::BatchPath::Avx2);
+  const int sizes[] = {1, 3, 16, 17, 64, 127, 128, 129, 300, 1024, 1500};
+  const int n = 12000;
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<float> U(-200.0f, 200.0f);
+  std::vector<float> x(n), y(n);
+  for (int i = 0; i < n; ++i) {
+    x[size_t(i)] = U(rng);
+    y[size_t(i)] = U(rng);
+  }
+  auto same_bits = [](float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+  auto same_vec = [&](const Vec3& a, const Vec3& b) {
+    return same_bits(a.x, b.x) && same_bits(a.y, b.y) && same_bits(a.z, b.z);
+  };
+  for (const StitchParams& sp : {StitchParams{}, steep_stitch()}) {
+    const KnitSurface s(test::pyramid16(), sp);
+    for (const KnitSurface::BatchPath path : paths) {
+      SCOPED_TRACE(KnitSurface::batch_isa_name(s.batch_isa(path)));
+      std::vector<SurfaceHit> whole(n), pieces(n);
+      s.query_batch(x.data(), y.data(), size_t(n), whole.data(), path);
+      int at = 0, calls = 0;
+      while (at < n) {
+        const int m = std::min(sizes[calls++ % 11], n - at);
+        s.query_batch(x.data() + at, y.data() + at, size_t(m), pieces.data() + at, path);
+        at += m;
+      }
+      long hits = 0, differ = 0;
+      for (int i = 0; i < n; ++i) {
+        const SurfaceHit& a = whole[size_t(i)];
+        const SurfaceHit& b = pieces[size_t(i)];
+        hits += a.hit;
+        if (a.hit != b.hit || a.layers != b.layers || a.row != b.row || a.col != b.col || a.stitch != b.stitch ||
+            a.color != b.color || !same_vec(a.position, b.position) || !same_vec(a.normal, b.normal) ||
+            !same_vec(a.tangent, b.tangent)) {
+          if (++differ <= 3)  // (a zero's sign counts: tangent z was once 0 in one call and -0 in another)
+            std::printf("  point %d (%.6f, %.6f) differs: z %.9g / %.9g, tangent z %g / %g, normal z %.9g / %.9g\n", i,
+                        double(x[size_t(i)]), double(y[size_t(i)]), double(a.position.z), double(b.position.z),
+                        double(a.tangent.z), double(b.tangent.z), double(a.normal.z), double(b.normal.z));
+        }
+      }
+      std::printf("%s, a %.1f h %.1f d %+.1f r %.2f: %d points in one call and in %d calls of 1-1500: %ld hits, "
+                  "%ld differ\n",
+                  KnitSurface::batch_isa_name(s.batch_isa(path)), double(sp.a), double(sp.h), double(sp.d),
+                  double(sp.r), n, calls, hits, differ);
+      EXPECT_GT(hits, long(n) / 4);  // (something to compare)
+      EXPECT_EQ(differ, 0);
+    }
   }
 }
 
