@@ -132,7 +132,7 @@ class PyKnitSurface {
     ::py::array_t<double> z(P.n);
     double* pz = z.mutable_data();
     // Ranges of points through KnitSurface::query_batch (32 or 16 at a time
-    // with AVX-512, 8 with AVX2, where the CPU has it), in pieces of at most kQueryBlock; the
+    // with AVX-512, 16 or 8 with AVX2, where the CPU has it), in pieces of at most kQueryBlock; the
     // ranges on every core from kParallelRows points up.
     constexpr ssize_t kQueryBlock = 1024;
     for_each_range(P.n, kQueryBlock, [&](ssize_t begin, ssize_t end) {
@@ -384,7 +384,7 @@ arrays: hit (bool), z (height of that surface, nan on a miss), position (N,3),
 normal (N,3, outward tube normal), tangent (N,3, unit yarn direction), layers
 (number of tubes the vertical line crosses), stitch (code, -1 on a miss),
 color (colour index, -1 on a miss), row, col (cell of the yarn hit).
-Runs 16 points at a time with AVX-512, or 8 with AVX2, where the CPU has them
+Runs 32 points at a time with AVX-512, or 16 with AVX2, where the CPU has them
 and the pattern has knit and purl stitches only (the same results up to float
 rounding; query_path says which), on every core for large arrays.)doc")
       .def_property_readonly(

@@ -48,8 +48,8 @@ std::string compiler() {
 std::vector<std::pair<std::string, std::string>> build_info() {
   const KnitSurface::BatchIsa isa = KnitSurface::batch_best_isa();
   std::string batch = KnitSurface::batch_isa_name(isa);
-  batch += isa == KnitSurface::BatchIsa::Avx512 ? " (16 points at a time)"
-           : isa == KnitSurface::BatchIsa::Avx2 ? " (8 points at a time)"
+  batch += isa == KnitSurface::BatchIsa::Avx512 ? " (32 points at a time, 16 in calls of fewer than 128)"
+           : isa == KnitSurface::BatchIsa::Avx2 ? " (16 points at a time, 8 in calls of fewer than 32)"
                                                  : " (no AVX2 with FMA on this CPU: one point at a time)";
   return {
       {"compiler", compiler()},

@@ -1,5 +1,5 @@
 // KnitSurface::query_batch: vertical queries at many points, 32 or 16 at a
-// time with AVX-512 or 8 at a time with AVX2, whichever the CPU has.
+// time with AVX-512 or 16 or 8 at a time with AVX2, whichever the CPU has.
 //
 // The vertical query of query.h (knit_vertical_query) taken apart into
 // stages, each run over a vector of lanes at once:
@@ -41,18 +41,19 @@
 // The stages are written once (query_batch_stages.inc) over a small set of
 // vector operations, which query_batch_avx512.inc (16 lanes, masks as bits)
 // and query_batch_avx2.inc (8 lanes, masks as vectors; compress and expand
-// by permutation tables) each provide; the file is compiled once per
-// instruction set, in its own namespace, and the CPU picks one at run time.
-// The AVX-512 path runs its calls of kWideMin points or more over 32 lanes,
-// two registers side by side (query_batch_avx512x2.inc, a third
-// compilation of the stages): the chains of dependent operations of the
+// by permutation tables) each provide over one register, and
+// query_batch_pair.inc over two registers of either. The file is compiled
+// for each, in its own namespace, and the CPU picks one at run time. The
+// pairs (32 lanes with AVX-512, 16 with AVX2) run every stage with two
+// registers side by side: the chains of dependent operations of the
 // closest points and the entry searches are long, and two of them
-// interleaved take 14% off the whole batch on an Intel Xeon with AVX-512
-// (a fifth off the closest points on Zen 4, where the other stages gain
-// nothing). Smaller calls run the 16-lane stages, whose vectors the few
-// points fill better, with the 32-lane closest points; both give the same
-// results bit for bit, so a point's result does not depend on how many
-// points it is asked with.
+// interleaved take 14% off the AVX-512 batch and a fifth off the AVX2 one
+// on an Intel Xeon (a fifth off the AVX-512 closest points on Zen 4, where
+// the other stages gain nothing). Calls of fewer points than kWideMinAvx512
+// or kWideMinAvx2 run the one-register stages, whose vectors the few points
+// fill better, with the pairs' closest points; both give the same results
+// bit for bit, so a point's result does not depend on how many points it
+// is asked with.
 #include <algorithm>
 #include <climits>
 #include <cmath>
@@ -129,9 +130,10 @@ struct Work {
 };
 constexpr float kBig = 1.0e30f;
 constexpr int kBlock = 1024;  // points per pass through the stages
-// The fewest points a call takes the AVX-512 path's 32 lanes for (below
-// it the 16-lane stages are as fast or faster: BM_VerticalQueryBatchSmall)
-constexpr int kWideMin = 128;
+// The fewest points a call takes each path's pairs of registers for
+// (below them one register is as fast or faster: BM_VerticalQueryBatchSmall)
+constexpr int kWideMinAvx512 = 128;
+constexpr int kWideMinAvx2 = 32;
 
 // The x and y of the quadratic interpolant of piece place j (0..7) of a
 // knit or purl row, in double: q0 + q1 u + q2 u^2 for u in [0, 1] through
@@ -377,10 +379,29 @@ const CandidateBins& candidate_bins(const k::KnitGeom& g) {
 #endif
 #define KNIT_TARGET_STR(x) #x
 
-// The stages over 32 lanes (two AVX-512 registers), for the AVX-512 path.
+// Each instruction set's one-register operations, then the stages over
+// pairs of registers (query_batch_pair.inc on top of them), then over one
+// register, with the pairs' closest points.
+#define KNIT_AVX512_TARGET "avx512f,avx512dq,fma,avx2,bmi,bmi2,popcnt"
+#define KNIT_AVX2_TARGET "avx2,fma,popcnt"
+namespace avx512 {
+KNIT_TARGET_BEGIN(KNIT_AVX512_TARGET)
+#include "query_batch_avx512.inc"
+KNIT_TARGET_END
+}  // namespace avx512
+
+namespace avx2 {
+KNIT_TARGET_BEGIN(KNIT_AVX2_TARGET)
+#include "query_batch_avx2.inc"
+KNIT_TARGET_END
+}  // namespace avx2
+
+// The stages over 32 lanes (two AVX-512 registers) and over 16 (two AVX2
+// registers).
 namespace avx512x2 {
-KNIT_TARGET_BEGIN("avx512f,avx512dq,fma,avx2,bmi,bmi2,popcnt")
-#include "query_batch_avx512x2.inc"
+KNIT_TARGET_BEGIN(KNIT_AVX512_TARGET)
+namespace one = avx512;
+#include "query_batch_pair.inc"
 #include "query_batch_stages.inc"
 void closest_points_wide(const k::KnitGeom& g, const float* xb, const float* yb, int ncand, Work& wk) {
   closest_points(g, batch_consts(g), xb, yb, ncand, wk);
@@ -388,19 +409,32 @@ void closest_points_wide(const k::KnitGeom& g, const float* xb, const float* yb,
 KNIT_TARGET_END
 }  // namespace avx512x2
 
+namespace avx2x2 {
+KNIT_TARGET_BEGIN(KNIT_AVX2_TARGET)
+namespace one = avx2;
+#include "query_batch_pair.inc"
+#include "query_batch_stages.inc"
+void closest_points_wide(const k::KnitGeom& g, const float* xb, const float* yb, int ncand, Work& wk) {
+  closest_points(g, batch_consts(g), xb, yb, ncand, wk);
+}
+KNIT_TARGET_END
+}  // namespace avx2x2
+
+// The stages over one register, for calls of fewer than kWideMinAvx512 or
+// kWideMinAvx2 points.
 namespace avx512 {
-KNIT_TARGET_BEGIN("avx512f,avx512dq,fma,avx2,bmi,bmi2,popcnt")
+KNIT_TARGET_BEGIN(KNIT_AVX512_TARGET)
 #define KNIT_CLOSEST_POINTS_WIDE avx512x2::closest_points_wide
-#include "query_batch_avx512.inc"
 #include "query_batch_stages.inc"
 #undef KNIT_CLOSEST_POINTS_WIDE
 KNIT_TARGET_END
 }  // namespace avx512
 
 namespace avx2 {
-KNIT_TARGET_BEGIN("avx2,fma,popcnt")
-#include "query_batch_avx2.inc"
+KNIT_TARGET_BEGIN(KNIT_AVX2_TARGET)
+#define KNIT_CLOSEST_POINTS_WIDE avx2x2::closest_points_wide
 #include "query_batch_stages.inc"
+#undef KNIT_CLOSEST_POINTS_WIDE
 KNIT_TARGET_END
 }  // namespace avx2
 
@@ -452,14 +486,17 @@ void KnitSurface::query_batch(const float* x, const float* y, size_t n, SurfaceH
   const BatchIsa isa = batch_isa(path);
 #if KNIT_HAVE_SIMD_PATHS
   if (isa == BatchIsa::Avx512) {
-    if (n >= size_t(kWideMin))
+    if (n >= size_t(kWideMinAvx512))
       avx512x2::query_all(*this, x, y, n, out);
     else
       avx512::query_all(*this, x, y, n, out);
     return;
   }
   if (isa == BatchIsa::Avx2) {
-    avx2::query_all(*this, x, y, n, out);
+    if (n >= size_t(kWideMinAvx2))
+      avx2x2::query_all(*this, x, y, n, out);
+    else
+      avx2::query_all(*this, x, y, n, out);
     return;
   }
 #else

@@ -166,9 +166,10 @@ TEST(QueryBatch, AlternatingStitchesKeepTheirOwnConstants) {
 }
 
 // A point's result must not depend on how many points are asked with it:
-// the AVX-512 path runs calls of 128 points or more over 32 lanes and
-// smaller ones over 16 (query_batch.cpp), and Python's query cuts its
-// arrays into blocks, so the same point meets both. Every field, bit for
+// the vector paths run calls of 128 points or more (AVX-512) or 32 or more
+// (AVX2) on pairs of registers and smaller ones on one (query_batch.cpp),
+// and Python's query cuts its arrays into blocks, so the same point meets
+// both. Every field, bit for
 // bit, one call of all the points against calls of sizes on both sides of
 // that threshold, for each vector path this CPU has.
 TEST(QueryBatch, ResultsDoNotDependOnTheCallSize) {
@@ -176,7 +177,7 @@ TEST(QueryBatch, ResultsDoNotDependOnTheCallSize) {
     GTEST_SKIP() << "this CPU has neither AVX-512 nor AVX2 with FMA: no vector path to check";
   std::vector<KnitSurface::BatchPath> paths = {KnitSurface::BatchPath::Simd};
   if (KnitSurface::batch_best_isa() == KnitSurface::BatchIsa::Avx512) paths.push_back(KnitSurface::BatchPath::Avx2);
-  const int sizes[] = {1, 3, 16, 17, 64, 127, 128, 129, 300, 1024, 1500};
+  const int sizes[] = {1, 3, 16, 17, 31, 32, 33, 64, 127, 128, 129, 300, 1024, 1500};
   const int n = 12000;
   std::mt19937 rng(23);
   std::uniform_real_distribution<float> U(-200.0f, 200.0f);
@@ -197,7 +198,7 @@ TEST(QueryBatch, ResultsDoNotDependOnTheCallSize) {
       s.query_batch(x.data(), y.data(), size_t(n), whole.data(), path);
       int at = 0, calls = 0;
       while (at < n) {
-        const int m = std::min(sizes[calls++ % 11], n - at);
+        const int m = std::min(sizes[calls++ % 14], n - at);
         s.query_batch(x.data() + at, y.data() + at, size_t(m), pieces.data() + at, path);
         at += m;
       }
