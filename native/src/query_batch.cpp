@@ -403,9 +403,6 @@ KNIT_TARGET_BEGIN(KNIT_AVX512_TARGET)
 namespace one = avx512;
 #include "query_batch_pair.inc"
 #include "query_batch_stages.inc"
-void closest_points_wide(const k::KnitGeom& g, const float* xb, const float* yb, int ncand, Work& wk) {
-  closest_points(g, batch_consts(g), xb, yb, ncand, wk);
-}
 KNIT_TARGET_END
 }  // namespace avx512x2
 
@@ -414,9 +411,6 @@ KNIT_TARGET_BEGIN(KNIT_AVX2_TARGET)
 namespace one = avx2;
 #include "query_batch_pair.inc"
 #include "query_batch_stages.inc"
-void closest_points_wide(const k::KnitGeom& g, const float* xb, const float* yb, int ncand, Work& wk) {
-  closest_points(g, batch_consts(g), xb, yb, ncand, wk);
-}
 KNIT_TARGET_END
 }  // namespace avx2x2
 
