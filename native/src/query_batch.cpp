@@ -114,7 +114,7 @@ struct Work {
   // stage 3: entries, in the order the lanes finish them, with their live
   // slot: whether a crossing was found, the entry distance below the shell
   // top, and the column, normal and tangent there
-  std::vector<int32_t> o_slot, o_hit, o_col;
+  std::vector<int32_t> o_slot, o_col;
   std::vector<float> o_sin, o_nx, o_ny, o_nz, o_tx, o_ty, o_tz;
 
   // Room for `need` candidates (and slack for the full-width stores and
@@ -122,7 +122,7 @@ struct Work {
   void reserve(size_t need) {
     const size_t cap = need + 32;
     if (pt.size() >= cap) return;
-    for (auto* v : {&pt, &row, &piece, &inside, &use, &l_c, &l_cs, &l_k, &l_bits, &o_slot, &o_hit, &o_col, &l_off, &l_csm})
+    for (auto* v : {&pt, &row, &piece, &inside, &use, &l_c, &l_cs, &l_k, &l_bits, &o_slot, &o_col, &l_off, &l_csm})
       v->resize(2 * cap, 0);
     for (auto* v : {&t, &l_t, &l_x, &l_y, &o_sin, &o_nx, &o_ny, &o_nz, &o_tx, &o_ty, &o_tz})
       v->resize(2 * cap, 0.0f);
