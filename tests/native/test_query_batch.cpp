@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <iterator>
 #include <limits>
 #include <random>
 #include <string>
@@ -169,9 +170,9 @@ TEST(QueryBatch, AlternatingStitchesKeepTheirOwnConstants) {
 // the vector paths run calls of 128 points or more (AVX-512) or 32 or more
 // (AVX2) on pairs of registers and smaller ones on one (query_batch.cpp),
 // and Python's query cuts its arrays into blocks, so the same point meets
-// both. Every field, bit for
-// bit, one call of all the points against calls of sizes on both sides of
-// that threshold, for each vector path this CPU has.
+// both. Every field, bit for bit, one call of all the points against calls
+// of sizes on both sides of both thresholds, for each vector path this CPU
+// has.
 TEST(QueryBatch, ResultsDoNotDependOnTheCallSize) {
   if (!KnitSurface::batch_simd_available())
     GTEST_SKIP() << "this CPU has neither AVX-512 nor AVX2 with FMA: no vector path to check";
@@ -198,7 +199,7 @@ TEST(QueryBatch, ResultsDoNotDependOnTheCallSize) {
       s.query_batch(x.data(), y.data(), size_t(n), whole.data(), path);
       int at = 0, calls = 0;
       while (at < n) {
-        const int m = std::min(sizes[calls++ % 14], n - at);
+        const int m = std::min(sizes[size_t(calls++) % std::size(sizes)], n - at);
         s.query_batch(x.data() + at, y.data() + at, size_t(m), pieces.data() + at, path);
         at += m;
       }
