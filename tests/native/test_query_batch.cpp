@@ -42,6 +42,26 @@ double angle_deg(Vec3 a, Vec3 b) {
   return std::acos(std::max(-1.0, std::min(1.0, c))) * 180.0 / 3.14159265358979;
 }
 
+// The vector paths this CPU runs: its widest, and AVX2 beside AVX-512.
+std::vector<KnitSurface::BatchPath> vector_paths() {
+  std::vector<KnitSurface::BatchPath> paths = {KnitSurface::BatchPath::Simd};
+  if (KnitSurface::batch_best_isa() == KnitSurface::BatchIsa::Avx512) paths.push_back(KnitSurface::BatchPath::Avx2);
+  return paths;
+}
+
+// n points drawn uniformly from [-half, half] in x and y (x, then y, for
+// each point in turn).
+void random_points(int n, unsigned seed, float half, std::vector<float>& x, std::vector<float>& y) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> U(-half, half);
+  x.resize(size_t(n));
+  y.resize(size_t(n));
+  for (int i = 0; i < n; ++i) {
+    x[size_t(i)] = U(rng);
+    y[size_t(i)] = U(rng);
+  }
+}
+
 // The vector path `path` (which must run here as `isa`) against query().
 void check_agreement(KnitSurface::BatchPath path, KnitSurface::BatchIsa isa) {
   for (const Named& np : loop_patterns()) {
@@ -56,13 +76,8 @@ void check_agreement(KnitSurface::BatchPath path, KnitSurface::BatchIsa isa) {
       // points over a wide window, negative coordinates included, and an odd
       // count (a partial vector and a partial block at the end)
       const int n = 40001;
-      std::mt19937 rng(11);
-      std::uniform_real_distribution<float> U(-400.0f, 400.0f);
-      std::vector<float> x(n), y(n);
-      for (int i = 0; i < n; ++i) {
-        x[size_t(i)] = U(rng);
-        y[size_t(i)] = U(rng);
-      }
+      std::vector<float> x, y;
+      random_points(n, 11, 400.0f, x, y);
       std::vector<SurfaceHit> b(n);
       s.query_batch(x.data(), y.data(), size_t(n), b.data(), path);
       long hit_diff = 0, layer_diff = 0, cell_diff = 0, both = 0, far_z = 0;
@@ -142,8 +157,7 @@ TEST(QueryBatch, AlternatingStitchesKeepTheirOwnConstants) {
     y.push_back(0.413f * float(i / 97) * 4.0f - 10.0f);
   }
   const size_t n = x.size();
-  std::vector<KnitSurface::BatchPath> paths = {KnitSurface::BatchPath::Simd};
-  if (KnitSurface::batch_best_isa() == KnitSurface::BatchIsa::Avx512) paths.push_back(KnitSurface::BatchPath::Avx2);
+  const std::vector<KnitSurface::BatchPath> paths = vector_paths();
   for (const KnitSurface::BatchPath path : paths) {
     SCOPED_TRACE(KnitSurface::batch_isa_name(sa.batch_isa(path)));
     std::vector<SurfaceHit> a1(n), b1(n), a2(n);
@@ -176,17 +190,11 @@ TEST(QueryBatch, AlternatingStitchesKeepTheirOwnConstants) {
 TEST(QueryBatch, ResultsDoNotDependOnTheCallSize) {
   if (!KnitSurface::batch_simd_available())
     GTEST_SKIP() << "this CPU has neither AVX-512 nor AVX2 with FMA: no vector path to check";
-  std::vector<KnitSurface::BatchPath> paths = {KnitSurface::BatchPath::Simd};
-  if (KnitSurface::batch_best_isa() == KnitSurface::BatchIsa::Avx512) paths.push_back(KnitSurface::BatchPath::Avx2);
+  const std::vector<KnitSurface::BatchPath> paths = vector_paths();
   const int sizes[] = {1, 3, 16, 17, 31, 32, 33, 64, 127, 128, 129, 300, 1024, 1500};
   const int n = 12000;
-  std::mt19937 rng(23);
-  std::uniform_real_distribution<float> U(-200.0f, 200.0f);
-  std::vector<float> x(n), y(n);
-  for (int i = 0; i < n; ++i) {
-    x[size_t(i)] = U(rng);
-    y[size_t(i)] = U(rng);
-  }
+  std::vector<float> x, y;
+  random_points(n, 23, 200.0f, x, y);
   auto same_bits = [](float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; };
   auto same_vec = [&](const Vec3& a, const Vec3& b) {
     return same_bits(a.x, b.x) && same_bits(a.y, b.y) && same_bits(a.z, b.z);
@@ -277,18 +285,12 @@ TEST(QueryBatch, EntryCellsAreThePatternsCells) {
     }
   const Pattern pat = Pattern::from_rows(codes, colors);
   const auto wrap = [](int a, int m) { return ((a % m) + m) % m; };
-  std::vector<KnitSurface::BatchPath> paths = {KnitSurface::BatchPath::Simd};
-  if (KnitSurface::batch_best_isa() == KnitSurface::BatchIsa::Avx512) paths.push_back(KnitSurface::BatchPath::Avx2);
+  const std::vector<KnitSurface::BatchPath> paths = vector_paths();
   for (const StitchParams& sp : {StitchParams{}, steep_stitch()}) {
     const KnitSurface s(pat, sp);
-    std::mt19937 rng(17);
-    std::uniform_real_distribution<float> U(-200.0f, 200.0f);
     const int n = 20000;
-    std::vector<float> x(n), y(n);
-    for (int i = 0; i < n; ++i) {
-      x[size_t(i)] = U(rng);
-      y[size_t(i)] = U(rng);
-    }
+    std::vector<float> x, y;
+    random_points(n, 17, 200.0f, x, y);
     for (const KnitSurface::BatchPath path : paths) {
       SCOPED_TRACE(KnitSurface::batch_isa_name(s.batch_isa(path)));
       std::vector<SurfaceHit> b(static_cast<size_t>(n));
@@ -321,18 +323,12 @@ TEST(QueryBatch, EntryCellsAreThePatternsCells) {
 TEST(QueryBatch, CandidateBinsGiveWhatTheWholeBoxGives) {
   if (!KnitSurface::batch_simd_available())
     GTEST_SKIP() << "this CPU has neither AVX-512 nor AVX2 with FMA: no vector path to check";
-  std::vector<KnitSurface::BatchPath> paths = {KnitSurface::BatchPath::Simd};
-  if (KnitSurface::batch_best_isa() == KnitSurface::BatchIsa::Avx512) paths.push_back(KnitSurface::BatchPath::Avx2);
+  const std::vector<KnitSurface::BatchPath> paths = vector_paths();
   for (const StitchParams& sp : {StitchParams{}, steep_stitch(), round_stitch()}) {
     const KnitSurface s(test::pyramid16(), sp);
-    std::mt19937 rng(5);
-    std::uniform_real_distribution<float> U(-300.0f, 300.0f);
     const int n = 6000;
-    std::vector<float> x(n), y(n), xf, yf;
-    for (int i = 0; i < n; ++i) {
-      x[size_t(i)] = U(rng);
-      y[size_t(i)] = U(rng);
-    }
+    std::vector<float> x, y, xf, yf;
+    random_points(n, 5, 300.0f, x, y);
     // the same points, with a point at x = 2e4 in every eighth place
     std::vector<int> at;
     for (int i = 0; i < n; ++i) {
