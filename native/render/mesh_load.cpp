@@ -8,6 +8,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -69,6 +70,16 @@ void check_ply_header(const std::string& path) {
     pos = nl + 1;
     ++line;
     if (!text.empty() && text.back() == '\r') text.pop_back();
+    // Spaces and tabs only: assimp does not take a vertical tab or a form
+    // feed for a separator, so a line of them, blank to the tokens below,
+    // is not blank to it, and its binary reader then reads past the file's
+    // data (a crash, found by fuzz_mesh, 2026-12-03).
+    for (const char c : text)
+      if ((static_cast<unsigned char>(c) < 0x20 && c != '\t') || c == 0x7f) {
+        char hex[8];
+        std::snprintf(hex, sizeof hex, "0x%02x", static_cast<unsigned>(static_cast<unsigned char>(c)));
+        bad(std::string("a control character (") + hex + ") in the header: only text, spaces and tabs");
+      }
     std::istringstream ss(text);
     std::vector<std::string> tok;
     for (std::string t; ss >> t;) tok.push_back(t);

@@ -184,6 +184,14 @@ TEST(MeshLoad, MalformedPlyFilesGiveErrorsNotHangsOrCrashes) {
   EXPECT_NE(error_of(first).find("first.ply: PLY header line 1: a PLY file starts with a line 'ply'"),
             std::string::npos)
       << error_of(first);
+  // (a line of vertical tabs after the face's list property, in a binary
+  // file: assimp's reader crashed on it, found by fuzz_mesh 2026-12-03; the
+  // file is tests/fuzz/corpus/mesh/found-ply-crash-vertical-tab.ply)
+  const std::string vtab = test::write_file(dir, "vtab.ply",
+                                            "ply\nformat binary_little_endian 1.0\nelement vertex 0\n\x0b\x0b\nend_header\n");
+  EXPECT_NE(error_of(vtab).find("vtab.ply: PLY header line 4: a control character (0x0b) in the header"),
+            std::string::npos)
+      << error_of(vtab);
   const std::string no_format = test::write_file(dir, "noformat.ply", "ply\nelement vertex 0\nend_header\n");
   EXPECT_NE(error_of(no_format).find("noformat.ply: the PLY header has no format line"), std::string::npos)
       << error_of(no_format);
