@@ -134,24 +134,30 @@ void check_ply_header(const std::string& path) {
   // ASCII data: every list's length must fit in the values left. assimp 5.2
   // takes a long time over a list longer than the file (13 s for a 290-byte
   // file whose face claimed 30,022 indices: found by fuzz_mesh, 2026-12-03).
-  std::ifstream body(path, std::ios::binary);
-  body.seekg(static_cast<std::streamoff>(pos));
-  std::vector<std::string> values;
-  for (std::string t; body >> t;) values.push_back(t);
-  size_t at = 0;
+  // The values are streamed, not kept.
+  in.clear();
+  in.seekg(static_cast<std::streamoff>(pos));
+  const auto values_left = [&in] {
+    uint64_t n = 0;
+    for (std::string t; in >> t;) ++n;
+    return n;
+  };
+  std::string v;
   for (const Element& e : elements)
     for (uint64_t i = 0; i < e.count; ++i)
       for (const bool list : e.lists) {
-        if (at >= values.size())
+        if (!(in >> v))
           fail(path, "the PLY data ends inside '" + e.name + "' element " + std::to_string(i) + " of " +
                          std::to_string(e.count));
-        const std::string& v = values[at++];
         if (!list) continue;
         const bool number = !v.empty() && v.size() <= 10 && v.find_first_not_of("0123456789") == std::string::npos;
-        if (!number || std::stoull(v) > values.size() - at)
+        const uint64_t n = number ? std::stoull(v) : 0;
+        uint64_t k = 0;
+        for (std::string t; k < n && in >> t;) ++k;
+        if (!number || k < n)
           fail(path, "'" + e.name + "' element " + std::to_string(i) + " has a list of length '" + v +
-                         "', more than the values left in the file (" + std::to_string(values.size() - at) + ")");
-        at += size_t(std::stoull(v));
+                         "', more than the values left in the file (" + std::to_string(number ? k : values_left()) +
+                         ")");
       }
 }
 
