@@ -202,6 +202,16 @@ TEST(MeshLoad, MalformedPlyFilesGiveErrorsNotHangsOrCrashes) {
                                      "values left in the file (3)"),
             std::string::npos)
       << error_of(long_list);
+  // (an element named '77777777777777777vertex': assimp read its digits as
+  // a count of 266 million vertices and allocated 9 GB for them, found by
+  // fuzz_mesh 2026-12-03; the file is
+  // tests/fuzz/corpus/mesh/found-ply-slow-digit-name.ply)
+  const std::string digit_name = test::write_file(
+      dir, "digitname.ply", "ply\nformat ascii 1.0\nelement 77777777777777777vertex 4\nproperty float x\nend_header\n");
+  EXPECT_NE(error_of(digit_name).find("digitname.ply: PLY header line 3: the element name '77777777777777777vertex' "
+                                      "does not start with a letter or '_'"),
+            std::string::npos)
+      << error_of(digit_name);
   const std::string short_data =
       test::write_file(dir, "short.ply", vertex_header + "end_header\n0 0 0\n1 0 0\n1 1\n");
   EXPECT_NE(error_of(short_data).find("short.ply: the PLY data ends inside 'vertex' element 2 of 4"),
