@@ -29,6 +29,16 @@ void check_finite(const char* what, const double* p, ssize_t n) {
                               num(p[i]));
 }
 
+// Rows of 3 (shape (3,) or (N, 3)), named as the appearance functions name
+// them: "wi_local[4] must be finite, got nan in component 2".
+void check_finite_rows(const char* what, const Arr& a) {
+  for (ssize_t i = 0; i < a.size(); ++i)
+    if (!std::isfinite(a.data()[i]))
+      throw ::py::value_error(std::string(what) + (a.ndim() == 2 ? "[" + std::to_string(i / 3) + "]" : "") +
+                              " must be finite, got " + num(a.data()[i]) + " in component " +
+                              std::to_string(i % 3));
+}
+
 // CAPM's segment length, as KnitSurface::march bounds it (kMaxCapmSegment).
 void check_max_segment(double max_segment) {
   if (!capm_segment_in_range(max_segment))
@@ -191,7 +201,7 @@ class PyKnitSurface {
     if (nw != 1 && P.n != 1 && nw != P.n)
       throw ::py::value_error("wi_local has " + std::to_string(nw) + " rows but u, v have " +
                               std::to_string(P.n) + " points");
-    check_finite("wi_local", wi.data(), wi.size());
+    check_finite_rows("wi_local", wi);
     for (ssize_t i = 0; i < nw; ++i) {
       const double* w = wi.data() + 3 * i;
       if (!(w[2] > 0))
@@ -235,7 +245,7 @@ class PyKnitSurface {
     };
     const Vec3 ex = vec2(fx, "footprint_x"), ey = vec2(fy, "footprint_y");
     if (wi.ndim() != 1 || wi.shape(0) != 3) throw ::py::value_error("wi_local must have shape (3,)");
-    check_finite("wi_local", wi.data(), 3);
+    check_finite_rows("wi_local", wi);
     if (wi.data()[2] == 0) throw ::py::value_error("wi_local must not be tangent to the surface (z != 0)");
     if (n_points < 1 || n_points > KNIT_MS_MAX_POINTS)
       throw ::py::value_error("n_points must be in [1, " + std::to_string(KNIT_MS_MAX_POINTS) + "], got " +

@@ -204,6 +204,15 @@ class CapmTest(unittest.TestCase):
         with self.assertRaises(ValueError):
             knitshade.CylinderFrame(-1.0)
 
+    def test_a_non_finite_direction_is_named_by_its_row_and_component(self):
+        wi = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [0.1, math.nan, 1.0]])
+        with self.assertRaises(ValueError) as cm:
+            self.surf.capm(np.zeros(3), np.zeros(3), wi)
+        self.assertIn("wi_local[2] must be finite, got nan in component 1", str(cm.exception))
+        with self.assertRaises(ValueError) as cm:
+            self.surf.capm(1.0, 1.0, np.array([0.0, 0.0, math.inf]))
+        self.assertIn("wi_local must be finite, got inf in component 2", str(cm.exception))
+
 
 class ParallelBatchTest(unittest.TestCase):
     """Batches of 1024 points or more run on every core (TBB): each row must
