@@ -228,13 +228,13 @@ TriangleMesh load_mesh(const std::string& path, Warnings* warnings) {
           if (!is_finite(n))
             fail(path, "vertex " + std::to_string(base + v) + " has a non-finite normal");
           if (!identity) n = xf.normal(n);
-          // (scaled by its largest component first: a normal of 1e38s
-          // overflows its length, tiny ones are directions too)
-          const float big = std::max(std::fabs(n.x), std::max(std::fabs(n.y), std::fabs(n.z)));
-          if (!(big > 0) || !std::isfinite(big))
+          // (in double: a normal of 1e38s overflows its length in float, and
+          // a subnormal one its reciprocal, 1 / 8.8e-44 (found by fuzz_mesh,
+          // 2026-12-03); tiny ones are directions too)
+          const double nx = n.x, ny = n.y, nz = n.z, len = std::sqrt(nx * nx + ny * ny + nz * nz);
+          if (!(len > 0) || !std::isfinite(len))
             fail(path, "vertex " + std::to_string(base + v) + " has a zero-length normal");
-          n = n / big;
-          out.normals.push_back(n / length(n));
+          out.normals.push_back(Vec3(float(nx / len), float(ny / len), float(nz / len)));
         }
         if (all_uvs) {
           Vec2 uv(m->mTextureCoords[0][v].x, m->mTextureCoords[0][v].y);

@@ -255,7 +255,9 @@ TEST(MeshLoad, MalformedPlyFilesGiveErrorsNotHangsOrCrashes) {
 }
 
 // A file normal of 1e38s overflowed its length, and the normal became zero
-// (found by the mesh fuzzer); scaled first, it is the direction it gives.
+// (found by the mesh fuzzer); scaled first, it is the direction it gives. A
+// subnormal one (8.8e-44) overflowed the scale's reciprocal and became NaN
+// (fuzz_mesh, 2026-12-03; tests/fuzz/corpus/mesh/found-ply-subnormal-normal.ply).
 TEST(MeshLoad, HugeAndTinyFileNormalsAreDirections) {
   const std::string dir = test::test_dir();
   const TriangleMesh m = load_mesh(test::write_file(
@@ -266,6 +268,17 @@ TEST(MeshLoad, HugeAndTinyFileNormalsAreDirections) {
     EXPECT_NEAR(length(n), 1.0f, 1e-6f) << v;
     EXPECT_TRUE(std::fabs(n.z - 1.0f) < 1e-6f || std::fabs(n.y - 0.70710678f) < 1e-6f) << v;
   }
+  const TriangleMesh sub = load_mesh(test::write_file(
+      dir, "subn.ply",
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "property float nx\nproperty float ny\nproperty float nz\nelement face 1\n"
+      "property list uchar int vertex_indices\nend_header\n"
+      "0 0 0 8.8e-44 0 0\n1 0 0 0 0 1\n0 1 0 0 -3e-45 3e-45\n3 0 1 2\n"));
+  ASSERT_TRUE(sub.normals_from_file);
+  ASSERT_EQ(sub.normals.size(), 3u);
+  expect_vec_near(sub.normals[0], Vec3(1, 0, 0), 1e-6f, "subnormal x");
+  expect_vec_near(sub.normals[1], Vec3(0, 0, 1), 1e-6f, "unit z");
+  expect_vec_near(sub.normals[2], Vec3(0, -0.70710678f, 0.70710678f), 1e-6f, "subnormal -y +z");
 }
 
 TEST(MeshLoad, MirroringTransformKeepsWindingAndNormalsConsistent) {
