@@ -65,7 +65,8 @@ KnitModelMaterial::KnitModelMaterial(const KnitDesc& desc, std::shared_ptr<const
   tables_ = knit_mesh_tables(*mesh_, uv_scale);
   if (tables_.with_uv_area == 0)
     throw SceneError(scene_file, object_path + ".mesh",
-                     mesh_->file + ": no triangle has a non-zero UV area, which the knit material needs");
+                     mesh_->file + ": no triangle has a non-zero UV area and a size in the scene that single "
+                                   "precision resolves (after the object's transform), which the knit material needs");
   // Pattern space is single precision (knit::kMaxPatternCoord).
   for (size_t i = 0; i < mesh_->uvs.size(); ++i) {
     const Vec2 uv = mesh_->uvs[i];

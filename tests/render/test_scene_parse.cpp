@@ -431,6 +431,18 @@ TEST(SceneBuild, KnitNeedsUvs) {
     EXPECT_NE(msg.find("scene.json: objects[0].mesh:"), std::string::npos) << msg;
     EXPECT_NE(msg.find("no triangle has a non-zero UV area"), std::string::npos) << msg;
   }
+  // Good UVs on a mesh scaled below what single precision resolves: its
+  // triangles have no size in the scene, and the error says so.
+  {
+    json tiny = j;
+    tiny["objects"][0]["transform"] = {{"scale", 1e-38}};
+    const SceneDesc d = parse_scene(with_mesh(tiny, test::mesh("quad.obj")), "scene.json", dir);
+    const std::string msg = scene_error_of([&] { Scene s(d, BuildOptions{}, w); });
+    EXPECT_NE(msg.find("scene.json: objects[0].mesh:"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("a size in the scene that single precision resolves (after the object's transform)"),
+              std::string::npos)
+        << msg;
+  }
   // UVs that the material maps beyond single-precision pattern space.
   test::write_file(dir, "far_uv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1e9 1\nf 1/1 2/2 3/3\n");
   {
