@@ -22,8 +22,8 @@ class DiffuseMaterial final : public Material {
 
 // Smooth dielectric interface (delta reflection + delta refraction with the
 // exact Fresnel term). The shading normal points outside; eta = IOR inside /
-// IOR outside. `tint` scales refracted light. Roughness is parsed and
-// validated but not used until the rough lobes (native/kernel/bsdf_microfacet.h) land.
+// IOR outside. `tint` scales refracted light. A roughness above 0 is a
+// RoughDielectricMaterial.
 class SmoothDielectricMaterial final : public Material {
  public:
   explicit SmoothDielectricMaterial(const DielectricDesc& d) : eta_(d.eta), tint_(d.tint) {}
@@ -35,6 +35,28 @@ class SmoothDielectricMaterial final : public Material {
 
  private:
   float eta_;
+  Rgb tint_;
+};
+
+// Rough dielectric interface: isotropic GGX microfacets with alpha =
+// roughness^2 (Blender's and Cycles' convention), reflection and refraction
+// after Walter et al. 2007 with the exact dielectric Fresnel term and
+// height-correlated Smith shadowing, sampled from the visible normals
+// (Heitz 2018; the kernel's mf_ggx_* functions). As the smooth one: the
+// shading normal points outside, eta = IOR inside / IOR outside, radiance is
+// scaled by 1 / eta_rel^2 across the interface, `tint` scales refracted
+// light. Single scattering: light that the microfacets shadow is lost.
+class RoughDielectricMaterial final : public Material {
+ public:
+  explicit RoughDielectricMaterial(const DielectricDesc& d);
+  const char* kind() const override { return "rough dielectric"; }
+  bool has_smooth_lobes() const override { return true; }
+  Rgb eval(const SurfaceInteraction&, Vec3 wo, Vec3 wi) const override;
+  float pdf(const SurfaceInteraction&, Vec3 wo, Vec3 wi) const override;
+  bool sample(const SurfaceInteraction&, Vec3 wo, float uc, Vec2 u, BsdfSample& s) const override;
+
+ private:
+  float eta_, alpha_;
   Rgb tint_;
 };
 

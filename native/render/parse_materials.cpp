@@ -4,7 +4,7 @@
 namespace knit::render {
 
 MaterialDesc parse_material(JsonNode node, const std::string& name, const std::string& dir,
-                            Warnings& warnings, bool class_tables) {
+                            bool class_tables) {
   JsonObject o(node);
   MaterialDesc m;
   m.name = name;
@@ -17,11 +17,15 @@ MaterialDesc parse_material(JsonNode node, const std::string& name, const std::s
   } else if (type == "dielectric") {
     m.type = MaterialType::Dielectric;
     m.dielectric.eta = o.number("eta", Range::left_open(0, 4), m.dielectric.eta);
-    m.dielectric.roughness = o.number("roughness", unit, 0.0f);
+    const std::optional<JsonNode> rough = o.get("roughness");
+    const double roughness = rough ? rough->number(unit) : 0.0;
     m.dielectric.tint = o.rgb("tint", unit, Rgb(1.0f));
-    if (m.dielectric.roughness > 0)
-      warnings.add(node.file() + ": " + m.path + ".roughness = " + fmt_num(m.dielectric.roughness) +
-                   ": rough dielectrics are not implemented yet; rendering as smooth glass");
+    // GGX alpha = roughness^2: below 1e-4 single precision cannot resolve the
+    // lobe (its peak D = 1 / (pi alpha^2) and the half vector's rounding).
+    if (roughness > 0 && roughness < kMinDielectricRoughness)
+      rough->fail("must be 0 (smooth) or in [" + fmt_num(kMinDielectricRoughness) +
+                  ", 1] (GGX alpha = roughness^2), got " + fmt_num(roughness));
+    m.dielectric.roughness = float(roughness);
   } else if (type == "thin") {
     m.type = MaterialType::Thin;
     m.thin.transmittance = o.rgb("transmittance", unit);

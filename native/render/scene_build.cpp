@@ -24,7 +24,12 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 std::unique_ptr<Material> make_material(const MaterialDesc& m, const std::string& file) {
   switch (m.type) {
     case MaterialType::Diffuse: return std::make_unique<DiffuseMaterial>(m.diffuse.albedo);
-    case MaterialType::Dielectric: return std::make_unique<SmoothDielectricMaterial>(m.dielectric);
+    case MaterialType::Dielectric:
+      // (an index of 1 is no interface: light goes straight through, a delta
+      // whatever the roughness)
+      if (m.dielectric.roughness > 0 && m.dielectric.eta != 1.0f)
+        return std::make_unique<RoughDielectricMaterial>(m.dielectric);
+      return std::make_unique<SmoothDielectricMaterial>(m.dielectric);
     case MaterialType::Thin: return std::make_unique<ThinMaterial>(m.thin);
     case MaterialType::Knit: return std::make_unique<DiffuseMaterial>(m.knit.base_color());
   }

@@ -71,9 +71,11 @@ struct DiffuseDesc {
   Rgb albedo{0.8f};
 };
 
+constexpr double kMinDielectricRoughness = 0.01;
+
 struct DielectricDesc {
   float eta = 1.5f;
-  float roughness = 0;  // validated; rendered as 0 (smooth) until the rough lobes land
+  float roughness = 0;  // 0: smooth; else in [kMinDielectricRoughness, 1], GGX alpha = roughness^2
   Rgb tint{1.0f};       // applied to refraction
 };
 

@@ -142,7 +142,7 @@ SceneDesc parse_scene(const std::string& text, const std::string& file, const st
     for (const std::string& name : mats.keys()) {
       if (name.empty()) n->fail("material names must not be empty");
       s.materials.push_back(
-          parse_material(mats.at(name), name, dir, s.warnings, !(explicit_yarns || s.integrator.explicit_yarns)));
+          parse_material(mats.at(name), name, dir, !(explicit_yarns || s.integrator.explicit_yarns)));
     }
     mats.finish();
   }

@@ -22,7 +22,7 @@ LightDesc parse_light(JsonNode node, const std::string& dir);
 // class_tables: false when the knit model will not shade (explicit yarns):
 // multi-scale materials then skip building their class table.
 MaterialDesc parse_material(JsonNode node, const std::string& name, const std::string& dir,
-                            Warnings& warnings, bool class_tables = true);
+                            bool class_tables = true);
 KnitDesc parse_knit_material(JsonObject& obj, const std::string& dir, bool class_tables = true);
 
 }  // namespace knit::render
