@@ -104,7 +104,7 @@ TEST(RoughDielectric, MatchesADoublePrecisionWalterEvaluation) {
   double worst = 0;
   int compared = 0;
   for (float roughness : {0.05f, 0.3f, 0.8f})
-    for (float eta : {1.5f, 1.33f, 0.75f}) {
+    for (float eta : {1.5f, 1.33f, 0.75f, 1.05f}) {
       const RoughDielectricMaterial m = glass(roughness, eta);
       const double a = double(roughness) * roughness;
       for (int k = 0; k < 4000; ++k) {
@@ -156,7 +156,7 @@ TEST(RoughDielectric, SamplesAgreeWithEvalAndPdf) {
   const Rgb tint(0.9f, 0.7f, 0.5f);
   int samples = 0, transmitted = 0;
   for (float roughness : {0.01f, 0.1f, 0.5f, 1.0f})
-    for (float eta : {1.5f, 0.7f})
+    for (float eta : {1.5f, 0.7f, 1.02f})
       for (float theta : {0.1f, 0.8f, 1.4f, 2.0f, 2.9f}) {
         const RoughDielectricMaterial m = glass(roughness, eta, tint);
         const Vec3 wo = direction(theta, 0.4);
