@@ -48,8 +48,9 @@
 // registers side by side: the chains of dependent operations of the
 // closest points and the entry searches are long, and two of them
 // interleaved take 14% off the AVX-512 batch and a fifth off the AVX2 one
-// on an Intel Xeon (a fifth off the AVX-512 closest points on Zen 4, where
-// the other stages gain nothing). Calls of fewer points than kWideMinAvx512
+// on an Intel Xeon (on Zen 4 a fifth off the AVX-512 closest points, and
+// 5-7% off the whole batch against pairs for the closest points alone:
+// docs/geometry.md). Calls of fewer points than kWideMinAvx512
 // or kWideMinAvx2 run the one-register stages, whose vectors the few points
 // fill better, with the pairs' closest points; both give the same results
 // bit for bit, so a point's result does not depend on how many points it
