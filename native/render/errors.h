@@ -15,12 +15,18 @@ class SceneError : public std::runtime_error {
   SceneError(const std::string& file, const std::string& path, const std::string& message);
   // A position in the file (syntax errors), 1-based.
   SceneError(const std::string& file, int line, int column, const std::string& message);
+  // Both: "scene.json:12:7: materials.wool.a: must be > 0, got -1".
+  SceneError(const std::string& file, int line, int column, const std::string& path, const std::string& message);
 
   const std::string& file() const { return file_; }
   const std::string& path() const { return path_; }
+  const std::string& message() const { return message_; }  // without the location
+  int line() const { return line_; }                        // 0: not known
+  int column() const { return column_; }
 
  private:
-  std::string file_, path_;
+  std::string file_, path_, message_;
+  int line_ = 0, column_ = 0;
 };
 
 // Non-fatal findings at load time (skipped degenerate triangles, ignored

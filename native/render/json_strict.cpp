@@ -1,7 +1,9 @@
 #include "render/json_strict.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <string_view>
 
 #include "render/errors.h"
 
@@ -49,6 +51,142 @@ std::string frames_path(const std::vector<ParseFrame>& stack, size_t depth) {
 }
 }  // namespace
 
+JsonPositions::JsonPositions(const std::string& text) {
+  const size_t n = text.size();
+  line_starts_.push_back(0);
+  for (size_t i = 0; i < n; ++i)
+    if (text[i] == '\n') line_starts_.push_back(i + 1);
+
+  struct Open {
+    bool object;
+    std::string path;
+    size_t index;
+  };
+  std::vector<Open> open;  // the containers around the position, innermost last
+  size_t i = text.compare(0, 3, "\xEF\xBB\xBF") == 0 ? 3 : 0;  // (a byte-order mark, which the parser skips)
+  const auto skip_space = [&] {
+    while (i < n && (text[i] == ' ' || text[i] == '\t' || text[i] == '\n' || text[i] == '\r')) ++i;
+  };
+  // The end (one past the closing quote) of the string starting at s, or n.
+  const auto string_end = [&](size_t s) {
+    for (size_t k = s + 1; k < n; ++k) {
+      if (text[k] == '\\') {
+        ++k;
+      } else if (text[k] == '"') {
+        return k + 1;
+      }
+    }
+    return n;
+  };
+  std::string next;        // the path of the value expected at i
+  bool want_value = true;  // a value comes next (else ',' or a closing bracket)
+  // A member's key at i: records it, makes it `next`; false on bad text.
+  const auto read_key = [&] {
+    skip_space();
+    if (i >= n || text[i] != '"') return false;
+    const size_t s = i, e = string_end(i);
+    if (e >= n) return false;
+    std::string key = text.substr(s + 1, e - s - 2);
+    if (key.find('\\') != std::string::npos) {
+      // (escapes: the parser's own decoding, so the path is the one the
+      // scene reader builds)
+      const json k = json::parse(text.begin() + std::ptrdiff_t(s), text.begin() + std::ptrdiff_t(e), nullptr, false);
+      if (k.is_string()) key = k.get<std::string>();
+    }
+    std::string member = json_child_path(open.back().path, key);
+    if (!at_.emplace(member, s).second) duplicate_.emplace(member, s);
+    i = e;
+    skip_space();
+    if (i >= n || text[i] != ':') return false;
+    ++i;
+    next = std::move(member);
+    want_value = true;
+    return true;
+  };
+  for (;;) {
+    skip_space();
+    if (i >= n) break;
+    const char c = text[i];
+    if (want_value) {
+      at_.emplace(next, i);  // (a member is at its key, recorded already)
+      if (c == '{' || c == '[') {
+        open.push_back({c == '{', next, 0});
+        ++i;
+        skip_space();
+        if (i < n && text[i] == (c == '{' ? '}' : ']')) {
+          ++i;
+          open.pop_back();
+          want_value = false;
+        } else if (c == '{') {
+          if (!read_key()) break;
+        } else {
+          next = json_index_path(open.back().path, 0);
+        }
+        continue;
+      }
+      if (c == '"') {
+        i = string_end(i);
+      } else {
+        const size_t s = i;
+        while (i < n && std::string_view(",]} \t\r\n").find(text[i]) == std::string_view::npos) ++i;
+        if (i == s) break;
+      }
+      want_value = false;
+      continue;
+    }
+    if (open.empty()) break;
+    Open& o = open.back();
+    if (c == ',') {
+      ++i;
+      if (o.object) {
+        if (!read_key()) break;
+      } else {
+        next = json_index_path(o.path, ++o.index);
+        want_value = true;
+      }
+    } else if (c == (o.object ? '}' : ']')) {
+      ++i;
+      open.pop_back();
+    } else {
+      break;
+    }
+  }
+}
+
+void JsonPositions::line_col(size_t byte, int& line, int& column) const {
+  const auto it = std::upper_bound(line_starts_.begin(), line_starts_.end(), byte);
+  line = int(it - line_starts_.begin());
+  column = int(byte - *(it - 1)) + 1;
+}
+
+bool JsonPositions::locate(const std::string& path, int& line, int& column) const {
+  std::string p = path == "(top level)" ? std::string() : path;
+  for (;;) {
+    const auto it = at_.find(p);
+    if (it != at_.end()) {
+      line_col(it->second, line, column);
+      return true;
+    }
+    if (p.empty()) return false;
+    // the enclosing value: "a.b[2]" -> "a.b" -> "a" -> ""
+    const size_t cut = p.back() == ']' ? p.rfind('[') : p.rfind('.');
+    p.resize(cut == std::string::npos ? 0 : cut);
+  }
+}
+
+bool JsonPositions::locate_duplicate(const std::string& path, int& line, int& column) const {
+  const auto it = duplicate_.find(path);
+  if (it == duplicate_.end()) return false;
+  line_col(it->second, line, column);
+  return true;
+}
+
+SceneError JsonPositions::locate(const SceneError& e, const std::string& file) const {
+  int line = 0, column = 0;
+  if (e.line() > 0 || e.file() != file || e.path().empty() || !locate(e.path(), line, column)) return e;
+  return SceneError(e.file(), line, column, e.path(), e.message());
+}
+
 json parse_json_strict(const std::string& text, const std::string& file) {
   std::vector<ParseFrame> stack;
   auto callback = [&](int, json::parse_event_t ev, json& parsed) -> bool {
@@ -65,8 +203,11 @@ json parse_json_strict(const std::string& text, const std::string& file) {
         std::string k = parsed.get<std::string>();
         if (!f.keys.insert(k).second) {
           std::string where = frames_path(stack, stack.size());
-          throw SceneError(file, where.empty() ? std::string("(top level)") : where,
-                           "duplicate key '" + k + "'");
+          if (where.empty()) where = "(top level)";
+          int line = 0, col = 0;
+          if (JsonPositions(text).locate_duplicate(json_child_path(frames_path(stack, stack.size()), k), line, col))
+            throw SceneError(file, line, col, where, "duplicate key '" + k + "'");
+          throw SceneError(file, where, "duplicate key '" + k + "'");
         }
         f.key = k;
         break;

@@ -1,6 +1,7 @@
 // Strict reading of JSON input files: syntax errors with line/column,
 // duplicate keys rejected, unknown keys rejected, every value type- and
-// range-checked, and every error naming the file and the field's JSON path.
+// range-checked, and every error naming the file and the field's JSON path
+// (and, through JsonPositions, its line and column).
 //
 //   JsonObject film(root.at("film"));            // must be an object
 //   int w = film.integer("width", 1, 16384);     // required
@@ -10,6 +11,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <optional>
 #include <set>
 #include <string>
@@ -17,13 +19,43 @@
 
 #include <nlohmann/json.hpp>
 
+#include "render/errors.h"
 #include "render/vec.h"
 
 namespace knit::render {
 
 // Parses `text` (the contents of `file`). Throws SceneError: "file:line:col: ..."
-// for syntax errors, "file: path: duplicate key 'k'" for repeated keys.
+// for syntax errors, "file:line:col: path: duplicate key 'k'" for repeated
+// keys (the position of the second one).
 nlohmann::json parse_json_strict(const std::string& text, const std::string& file);
+
+// Where each value of a JSON text is, by JSON path (json_child_path,
+// json_index_path): an object member at its key, an array element at its
+// value, the whole text ("") at its first value. Reads any text without
+// throwing, crashing or recursing (bad text: what it could read), so that
+// an error found after parsing can name the line and column of its field.
+class JsonPositions {
+ public:
+  explicit JsonPositions(const std::string& text);
+
+  // The 1-based line and column of `path` or, when the text does not hold it
+  // (a missing key: "film.width"), of its nearest enclosing value; "(top
+  // level)" is the whole text. False when not even that is known.
+  bool locate(const std::string& path, int& line, int& column) const;
+  // The second occurrence of the member at `path` ("film.width" of a film
+  // with two widths).
+  bool locate_duplicate(const std::string& path, int& line, int& column) const;
+
+  // `e` with the position of its path added ("scene.json:12:7: path:
+  // message"), or `e` itself when it has a position already, names another
+  // file or no path, or its path is not found.
+  SceneError locate(const SceneError& e, const std::string& file) const;
+
+ private:
+  void line_col(size_t byte, int& line, int& column) const;
+  std::map<std::string, size_t> at_, duplicate_;
+  std::vector<size_t> line_starts_;
+};
 
 // An allowed interval for a number, with a printable description.
 struct Range {

@@ -4,6 +4,7 @@
 #include <map>
 
 #include "render/curve_shape.h"
+#include "render/json_strict.h"
 #include "render/material_explicit_yarn.h"
 #include "render/material_knit.h"
 #include "render/materials.h"
@@ -37,7 +38,8 @@ std::unique_ptr<Material> make_material(const MaterialDesc& m, const std::string
 }
 }  // namespace
 
-Scene::Scene(const SceneDesc& desc, const BuildOptions& options, Warnings& warnings)
+// (an error about a field of the scene file names its line: JsonPositions)
+Scene::Scene(const SceneDesc& desc, const BuildOptions& options, Warnings& warnings) try
     : desc_(desc), accel_(std::make_unique<Accel>()), camera_(desc.camera, desc.film.width, desc.film.height) {
   const auto t_load = std::chrono::steady_clock::now();
   for (const MaterialDesc& m : desc.materials) {
@@ -187,6 +189,9 @@ Scene::Scene(const SceneDesc& desc, const BuildOptions& options, Warnings& warni
   std::vector<const Light*> ptrs;
   for (const auto& l : lights_) ptrs.push_back(l.get());
   light_sampler_ = LightSampler(ptrs, radius_);
+} catch (const SceneError& e) {
+  if (!desc.text) throw;
+  throw JsonPositions(*desc.text).locate(e, desc.file);
 }
 
 }  // namespace knit::render

@@ -139,6 +139,10 @@ struct SceneDesc {
   std::vector<MaterialDesc> materials;
   std::vector<ObjectDesc> objects;
   Warnings warnings;
+  // The file's text (parse_scene; null for a scene made in code), so that an
+  // error found building the scene names the field's line and column too
+  // (JsonPositions, which reads it only then).
+  std::shared_ptr<const std::string> text;
 
   bool has_knit() const {
     for (const auto& m : materials)

@@ -126,9 +126,8 @@ static ObjectDesc parse_object(JsonNode node, size_t index, const std::string& d
   return d;
 }
 
-SceneDesc parse_scene(const std::string& text, const std::string& file, const std::string& dir,
-                      bool explicit_yarns) {
-  const nlohmann::json root = parse_json_strict(text, file);
+static SceneDesc parse_scene_tree(const nlohmann::json& root, const std::string& file, const std::string& dir,
+                                  bool explicit_yarns) {
   SceneDesc s;
   s.file = file;
   s.dir = dir;
@@ -165,6 +164,18 @@ SceneDesc parse_scene(const std::string& text, const std::string& file, const st
   top.finish();
   if (s.lights.empty()) s.warnings.add(file + ": the scene has no lights; the image will be black");
   return s;
+}
+
+SceneDesc parse_scene(const std::string& text, const std::string& file, const std::string& dir,
+                      bool explicit_yarns) {
+  const nlohmann::json root = parse_json_strict(text, file);
+  try {
+    SceneDesc s = parse_scene_tree(root, file, dir, explicit_yarns);
+    s.text = std::make_shared<const std::string>(text);
+    return s;
+  } catch (const SceneError& e) {
+    throw JsonPositions(text).locate(e, file);
+  }
 }
 
 SceneDesc load_scene_file(const std::string& path, bool explicit_yarns) {

@@ -1,10 +1,12 @@
 // libFuzzer harness for scene files (docs/scene-format.md): any input either
 // parses to a scene description whose numbers are finite and whose sizes are
-// within the documented limits, or throws a SceneError that names the file.
+// within the documented limits, or throws a SceneError that names the file
+// (and, for a field of the scene, its line and column, within the text).
 // Anything else (a crash, another exception, a NaN that got through) aborts.
 // Relative paths resolve against examples/scenes, so mutated inputs can reach
 // the real meshes, patterns and environment map there. Built as `fuzz_scene`
 // (clang, KNIT_FUZZ=ON) and as the corpus replay test with any compiler.
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -47,6 +49,19 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       fail("error does not name the scene or the asset file", msg);
     }
     if (msg.size() < e.file().size() + 3) fail("error without a message", msg);
+    // An error about a field of the scene names its line and column, and
+    // they lie in the text.
+    if (e.file() == "<fuzz>" && !e.path().empty() && e.line() == 0) fail("error without a position", msg);
+    if (e.line() > 0) {
+      size_t start = 0;
+      for (int l = 1; l < e.line(); ++l) {
+        start = text.find('\n', start);
+        if (start == std::string::npos) fail("error's line beyond the text", msg);
+        ++start;
+      }
+      const size_t end = std::min(text.find('\n', start), text.size());
+      if (e.column() < 1 || size_t(e.column()) > end - start + 1) fail("error's column beyond its line", msg);
+    }
   }
   return 0;
 }

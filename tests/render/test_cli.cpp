@@ -6,6 +6,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -143,7 +144,12 @@ TEST(Cli, BadSceneGivesOneLineAndExitCode1) {
   const CliRun r = run(dir, "render " + scene + " -o " + dir + "/out.png");
   EXPECT_EQ(r.code, 1);
   EXPECT_EQ(lines(r.err), 1) << r.err;
-  EXPECT_NE(r.err.find("knitshade render: error: " + scene + ": film.width: must be in [1, 16384], got -24"),
+  // (at the line and column of the field, counted here)
+  const size_t at = text.find("\"width\": -24");
+  const size_t line = 1 + size_t(std::count(text.begin(), text.begin() + long(at), '\n'));
+  const size_t col = at - (text.rfind('\n', at) == std::string::npos ? 0 : text.rfind('\n', at) + 1) + 1;
+  EXPECT_NE(r.err.find("knitshade render: error: " + scene + ":" + std::to_string(line) + ":" + std::to_string(col) +
+                       ": film.width: must be in [1, 16384], got -24"),
             std::string::npos)
       << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir + "/out.png"));

@@ -2,6 +2,9 @@
 // the file and the JSON path of the field at fault.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <regex>
+
 #include <nlohmann/json.hpp>
 
 #include "render/scene.h"
@@ -12,7 +15,15 @@ namespace knit::render {
 namespace {
 
 using nlohmann::json;
-using test::scene_error_of;
+
+// The message of the SceneError `fn` throws, with the line and column that
+// follow the scene file's name taken out ("scene.json:12:7: film.width: ..."
+// -> "scene.json: film.width: ..."): the tests below check the words, and
+// SceneParse.ErrorsNameTheLineAndColumnOfTheField checks the positions.
+template <class Fn>
+std::string scene_error_of(Fn&& fn) {
+  return std::regex_replace(test::scene_error_of(fn), std::regex("scene\\.json:[0-9]+:[0-9]+: "), "scene.json: ");
+}
 
 json base_scene() {
   return json::parse(R"({
@@ -39,8 +50,9 @@ std::string error_of(const json& j) {
   return scene_error_of([&] { parse(j); });
 }
 
+// (the message as it is, positions included)
 std::string error_of_text(const std::string& text) {
-  return scene_error_of([&] { parse_scene(text, "scene.json", "."); });
+  return test::scene_error_of([&] { parse_scene(text, "scene.json", "."); });
 }
 
 TEST(SceneParse, ValidSceneParses) {
@@ -78,8 +90,98 @@ TEST(SceneParse, NanLiteralIsASyntaxError) {
 }
 
 TEST(SceneParse, DuplicateKeyNamesTheObject) {
+  // (at the second key)
   const std::string msg = error_of_text(R"({"film": {"width": 8, "width": 9}})");
-  EXPECT_NE(msg.find("scene.json: film: duplicate key 'width'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("scene.json:1:23: film: duplicate key 'width'"), std::string::npos) << msg;
+  const std::string top = error_of_text("{\"film\": {},\n \"film\": {}}");
+  EXPECT_NE(top.find("scene.json:2:2: (top level): duplicate key 'film'"), std::string::npos) << top;
+}
+
+// The line and column of `needle`'s first occurrence at or after `from` in
+// `text`, counted here (1-based, in bytes), as "scene.json:L:C: ".
+std::string position_of(const std::string& text, const std::string& needle, size_t from = 0) {
+  const size_t at = text.find(needle, from);
+  EXPECT_NE(at, std::string::npos) << needle;
+  if (at == std::string::npos) return "?";
+  const size_t line_start = text.rfind('\n', at) == std::string::npos ? 0 : text.rfind('\n', at) + 1;
+  const long line = 1 + std::count(text.begin(), text.begin() + long(at), '\n');
+  return "scene.json:" + std::to_string(line) + ":" + std::to_string(at - line_start + 1) + ": ";
+}
+
+TEST(SceneParse, ErrorsNameTheLineAndColumnOfTheField) {
+  // Each error names the field's line and column: a member at its key, an
+  // array element at its value, a missing key at the object that lacks it,
+  // and an error found while building the scene (a mesh without UVs) at the
+  // object's field.
+  const std::string dir = test::test_dir();
+  test::write_file(dir, "no_uv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  const std::string good = R"({
+  "film": {"width": 8, "height": 6, "spp": 2},
+  "camera": {"position": [0, 1, 5], "look_at": [0, 0, 0], "fov": 40},
+  "lights": [
+    {"type": "point", "position": [0, 4, 0], "intensity": [10, 10, 10]},
+    {"type": "point", "position": [0, 4, 0],
+     "intensity": [10, 10, 10]}
+  ],
+  "materials": {
+    "we\u0069rd \"name\"": {"type": "diffuse", "albedo": [0.8, 0.1, 0.1]},
+    "wool": {"type": "knit", "pattern": ["KP"], "uv_scale": 10,
+             "yarn_colors": [[0.8, 0.2, 0.2]]}
+  },
+  "objects": [{"mesh": "QUAD", "material": "wool"},
+              {"mesh": "no_uv.obj", "material": "wool"}]
+})";
+  const auto err = [&](const std::string& text) {
+    return test::scene_error_of([&] { parse_scene(text, "scene.json", dir); });
+  };
+  const auto changed = [&](const std::string& from, const std::string& to) {
+    std::string t = good;
+    t.replace(t.find("QUAD"), 4, test::mesh("quad.obj"));
+    const size_t at = t.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    return at == std::string::npos ? t : t.replace(at, from.size(), to);
+  };
+  // a value out of range: at its key
+  std::string t = changed("\"fov\": 40", "\"fov\": 400");
+  EXPECT_NE(err(t).find(position_of(t, "\"fov\"") + "camera.fov: must be in (0, 180), got 400"), std::string::npos)
+      << err(t);
+  // an unknown key of the second element of an array, on a line of its own
+  t = changed("\"intensity\": [10, 10, 10]}\n  ]", "\"intensity\": [10, 10, 10],\n     \"intensty\": 1}\n  ]");
+  EXPECT_NE(err(t).find(position_of(t, "\"intensty\"") + "lights[1].intensty: unknown key"), std::string::npos)
+      << err(t);
+  // an element of an array of arrays: at its value
+  t = changed("[[0.8, 0.2, 0.2]]", "[[0.8, 2, 0.2]]");
+  EXPECT_NE(err(t).find(position_of(t, "2, 0.2]]") + "materials.wool.yarn_colors[0][1]: must be in [0, 1], got 2"),
+            std::string::npos)
+      << err(t);
+  // a missing key: at the object without it
+  t = changed("\"width\": 8, ", "");
+  EXPECT_NE(err(t).find(position_of(t, "\"film\"") + "film: missing required key 'width'"), std::string::npos)
+      << err(t);
+  // a key with escapes, decoded as the reader decodes it
+  t = changed("\"albedo\": [0.8, 0.1, 0.1]", "\"albedo\": [0.8, 0.1, -0.1]");
+  EXPECT_NE(err(t).find(position_of(t, "-0.1") + "materials.weird \"name\".albedo[2]: must be in [0, 1], got -0.1"),
+            std::string::npos)
+      << err(t);
+  // the top level: its members at their keys, the whole at its first value
+  t = changed("  \"film\"", "  \"extra\": true,\n  \"film\"");
+  EXPECT_NE(err(t).find(position_of(t, "\"extra\"") + "extra: unknown key"), std::string::npos) << err(t);
+  t = "\n\n  " + changed("  \"camera\": {\"position\": [0, 1, 5], \"look_at\": [0, 0, 0], \"fov\": 40},\n", "");
+  EXPECT_NE(err(t).find("scene.json:3:3: (top level): missing required key 'camera'"), std::string::npos) << err(t);
+  // after a byte-order mark, which the parser skips (the column counts its bytes)
+  t = "\xEF\xBB\xBF" + changed("\"width\": 8", "\"width\": 0");
+  EXPECT_NE(err(t).find(position_of(t, "\"width\"") + "film.width: must be in [1, 16384], got 0"), std::string::npos)
+      << err(t);
+
+  // Found while building the scene: at the object's "mesh".
+  t = changed("", "");
+  const SceneDesc d = parse_scene(t, "scene.json", dir);
+  Warnings w;
+  const std::string built = test::scene_error_of([&] { Scene s(d, BuildOptions{}, w); });
+  EXPECT_NE(built.find(position_of(t, "\"mesh\": \"no_uv.obj\"") + "objects[1].mesh: " + dir +
+                       "/no_uv.obj has no UV coordinates"),
+            std::string::npos)
+      << built;
 }
 
 TEST(SceneParse, UnknownKeysAreErrors) {
