@@ -67,7 +67,8 @@ JsonPositions::JsonPositions(const std::string& text) {
   const auto skip_space = [&] {
     while (i < n && (text[i] == ' ' || text[i] == '\t' || text[i] == '\n' || text[i] == '\r')) ++i;
   };
-  // The end (one past the closing quote) of the string starting at s, or n.
+  // The end (one past the closing quote) of the string starting at s, or
+  // npos when it has none.
   const auto string_end = [&](size_t s) {
     for (size_t k = s + 1; k < n; ++k) {
       if (text[k] == '\\') {
@@ -76,7 +77,7 @@ JsonPositions::JsonPositions(const std::string& text) {
         return k + 1;
       }
     }
-    return n;
+    return std::string::npos;
   };
   std::string next;        // the path of the value expected at i
   bool want_value = true;  // a value comes next (else ',' or a closing bracket)
@@ -85,7 +86,7 @@ JsonPositions::JsonPositions(const std::string& text) {
     skip_space();
     if (i >= n || text[i] != '"') return false;
     const size_t s = i, e = string_end(i);
-    if (e >= n) return false;
+    if (e == std::string::npos) return false;
     std::string key = text.substr(s + 1, e - s - 2);
     if (key.find('\\') != std::string::npos) {
       // (escapes: the parser's own decoding, so the path is the one the
@@ -126,6 +127,7 @@ JsonPositions::JsonPositions(const std::string& text) {
       }
       if (c == '"') {
         i = string_end(i);
+        if (i == std::string::npos) break;
       } else {
         const size_t s = i;
         while (i < n && std::string_view(",]} \t\r\n").find(text[i]) == std::string_view::npos) ++i;

@@ -6,13 +6,16 @@
 #include <assimp/Importer.hpp>
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <sstream>
+#include <string_view>
 #include <vector>
 
 #include "render/mesh.h"
@@ -167,6 +170,104 @@ void check_ply_header(const std::string& path) {
       }
 }
 
+// Whether `t` is a decimal number as OBJ writes them: [+-] digits [. digits]
+// [e [+-] digits], with digits on at least one side of the point.
+bool is_decimal(std::string_view t) {
+  size_t i = 0, digits = 0;
+  const auto run = [&] {
+    const size_t s = i;
+    while (i < t.size() && t[i] >= '0' && t[i] <= '9') ++i;
+    return i - s;
+  };
+  if (i < t.size() && (t[i] == '+' || t[i] == '-')) ++i;
+  digits += run();
+  if (i < t.size() && t[i] == '.') {
+    ++i;
+    digits += run();
+  }
+  if (digits == 0) return false;
+  if (i < t.size() && (t[i] == 'e' || t[i] == 'E')) {
+    ++i;
+    if (i < t.size() && (t[i] == '+' || t[i] == '-')) ++i;
+    if (run() == 0) return false;
+  }
+  return i == t.size();
+}
+
+// Whether the decimal number `t` (is_decimal) is finite in single
+// precision; one too small for a double is 0, which is.
+bool finite_as_float(std::string_view t) {
+  const char* b = t.data() + (t[0] == '+' ? 1 : 0);
+  double x = 0;
+  const auto r = std::from_chars(b, t.data() + t.size(), x);
+  if (r.ec == std::errc()) return std::fabs(x) <= double(std::numeric_limits<float>::max());
+  // Out of a double's range: too large when the point's place, moved by the
+  // exponent, lies right of the first digit (the exponent saturates)
+  const size_t e = t.find_first_of("eE");
+  const std::string_view m = t.substr(0, e);
+  const size_t lead = m.find_first_of("123456789");
+  const size_t point = std::min(m.find('.'), m.size());
+  long exp10 = 0;
+  if (e != std::string_view::npos) {
+    // (is_decimal: an exponent has digits after its sign)
+    const bool sign = t[e + 1] == '+' || t[e + 1] == '-';
+    for (size_t i = e + 1 + (sign ? 1 : 0); i < t.size(); ++i)
+      exp10 = std::min(exp10 * 10 + (t[i] - '0'), 100000L);
+    if (t[e + 1] == '-') exp10 = -exp10;
+  }
+  return lead == std::string_view::npos || long(point) - long(lead) + exp10 <= 0;
+}
+
+// OBJ text: every value of a vertex line ('v', 'vt', 'vn') must be a
+// decimal number that is finite in single precision. assimp 5.2 reads
+// "nan", "inf" and "1e999" into positions and normals, turns them into 0 in
+// UVs, and reads a word as 0, all without a word; this names the line and
+// the value instead. A line ending in a backslash continues on the next.
+void check_obj_numbers(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext != ".obj") return;
+  std::ifstream in(path, std::ios::binary);
+  std::string line, part;
+  size_t number = 0;
+  while (std::getline(in, line)) {
+    const size_t first = ++number;
+    // (continuations: the logical line is named by its first line)
+    while (!line.empty() && (line.back() == '\r' || line.back() == '\\')) {
+      if (line.back() == '\r') {
+        line.pop_back();
+        continue;
+      }
+      line.back() = ' ';
+      if (!std::getline(in, part)) break;
+      ++number;
+      line += part;
+    }
+    const std::string_view text = std::string_view(line).substr(0, line.find('#'));
+    const auto space = [](char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; };
+    std::string_view key;
+    size_t i = 0;
+    for (int token = 0;; ++token) {
+      while (i < text.size() && space(text[i])) ++i;
+      if (i >= text.size()) break;
+      const size_t s = i;
+      while (i < text.size() && !space(text[i])) ++i;
+      const std::string_view t = text.substr(s, i - s);
+      if (token == 0) {
+        key = t;
+        if (key != "v" && key != "vt" && key != "vn") break;
+        continue;
+      }
+      const auto bad = [&](const char* what) {
+        fail(path, "line " + std::to_string(first) + ": '" + std::string(t.substr(0, 40)) + "' in a '" +
+                       std::string(key) + "' line " + what);
+      };
+      if (!is_decimal(t)) bad("is not a number");
+      if (!finite_as_float(t)) bad("is not finite in single precision");
+    }
+  }
+}
+
 }  // namespace
 
 TriangleMesh load_mesh(const std::string& path, Warnings* warnings) {
@@ -174,6 +275,7 @@ TriangleMesh load_mesh(const std::string& path, Warnings* warnings) {
   if (!std::filesystem::is_regular_file(path, ec)) fail(path, "mesh file not found");
 
   check_ply_header(path);
+  check_obj_numbers(path);
 
   Assimp::Importer importer;
   // Points and lines are dropped; polygons are triangulated. No normal or

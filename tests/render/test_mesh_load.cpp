@@ -2,8 +2,10 @@
 // computed smooth normals and tangents, degenerate triangles, mirroring.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <string>
 
 #include "render/mesh.h"
 #include "render_test_util.h"
@@ -150,9 +152,11 @@ TEST(MeshLoad, Errors) {
   const std::string garbage = test::write_file(dir, "garbage.ply", "ply\nthis is not a ply file\n");
   EXPECT_NE(error_of(garbage).find("garbage.ply: "), std::string::npos);
   const std::string inf = test::write_file(dir, "inf.obj", "v 0 0 0\nv 1 0 0\nv 0 1e999 0\nf 1 2 3\n");
-  EXPECT_NE(error_of(inf).find("inf.obj: vertex 2 has a non-finite position"), std::string::npos) << error_of(inf);
-  // (assimp's OBJ reader turns non-finite "vt" values into 0 before we see
-  // them, a documented limitation; its PLY reader passes them through.)
+  EXPECT_NE(error_of(inf).find("inf.obj: line 3: '1e999' in a 'v' line is not finite in single precision"),
+            std::string::npos)
+      << error_of(inf);
+  // (assimp's PLY reader passes non-finite values through: they are found
+  // in what it read)
   const std::string nan_uv = test::write_file(
       dir, "nanuv.ply",
       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
@@ -160,9 +164,68 @@ TEST(MeshLoad, Errors) {
       "0 0 0 0 0\n1 0 0 nan 0\n0 1 0 0 1\n3 0 1 2\n");
   EXPECT_NE(error_of(nan_uv).find("nanuv.ply: vertex 1 has a non-finite UV"), std::string::npos) << error_of(nan_uv);
   const std::string nan_n = test::write_file(dir, "nann.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 nan\nf 1//1 2//1 3//1\n");
-  EXPECT_NE(error_of(nan_n).find("nann.obj: vertex 0 has a non-finite normal"), std::string::npos) << error_of(nan_n);
+  EXPECT_NE(error_of(nan_n).find("nann.obj: line 4: 'nan' in a 'vn' line is not a number"), std::string::npos)
+      << error_of(nan_n);
+  const std::string nan_pn = test::write_file(
+      dir, "nanpn.ply",
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "property float nx\nproperty float ny\nproperty float nz\nelement face 1\n"
+      "property list uchar int vertex_indices\nend_header\n"
+      "0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 nan 1\n3 0 1 2\n");
+  EXPECT_NE(error_of(nan_pn).find("nanpn.ply: vertex 2 has a non-finite normal"), std::string::npos)
+      << error_of(nan_pn);
   const std::string zero_n = test::write_file(dir, "zeron.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nf 1//1 2//1 3//1\n");
   EXPECT_NE(error_of(zero_n).find("zeron.obj: vertex 0 has a zero-length normal"), std::string::npos) << error_of(zero_n);
+}
+
+// An OBJ file's vertex lines are read before assimp reads them (which
+// would take a word or an infinite UV for 0 without a word): each bad
+// value is an error naming its line.
+TEST(MeshLoad, ObjVertexValuesAreCheckedWithTheirLine) {
+  const std::string dir = test::test_dir();
+  const std::string tri = "f 1/1 2/2 3/3\n";
+  const auto obj = [&](const std::string& name, const std::string& vertices) {
+    return error_of(test::write_file(dir, name, vertices + tri));
+  };
+  const std::string uvs = "vt 0 0\nvt 1 0\nvt 0 1\n";
+  EXPECT_NE(obj("uv_inf.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 inf\nvt 0 1\n")
+                .find("uv_inf.obj: line 5: 'inf' in a 'vt' line is not a number"),
+            std::string::npos);
+  EXPECT_NE(obj("uv_big.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 -3.5e38\n")
+                .find("uv_big.obj: line 6: '-3.5e38' in a 'vt' line is not finite in single precision"),
+            std::string::npos);
+  EXPECT_NE(obj("word.obj", "# a triangle\nv 0 0 0\nv one 0 0\nv 0 1 0\n" + uvs)
+                .find("word.obj: line 3: 'one' in a 'v' line is not a number"),
+            std::string::npos);
+  EXPECT_NE(obj("hex.obj", "v 0 0 0\nv 0x1p0 0 0\nv 0 1 0\n" + uvs)
+                .find("hex.obj: line 2: '0x1p0' in a 'v' line is not a number"),
+            std::string::npos);
+  EXPECT_NE(obj("exp.obj", "v 0 0 0\nv 1e 0 0\nv 0 1 0\n" + uvs)
+                .find("exp.obj: line 2: '1e' in a 'v' line is not a number"),
+            std::string::npos);
+  // A continued line is named by its first line; the lines after count on.
+  EXPECT_NE(obj("cont.obj", "v 0 0 \\\n 0\nv 1 0 0\nv 0 1 nan\n" + uvs)
+                .find("cont.obj: line 4: 'nan' in a 'v' line is not a number"),
+            std::string::npos);
+
+  // What is fine: CRLF line ends, a continuation, a comment after the
+  // values, signs, exponents, a point on either side, a fourth value, and
+  // (in lines no face uses) a number below a double's range (0) and the
+  // largest float.
+  const std::string good = test::write_file(
+      dir, "good.obj",
+      "v 0 0 0\r\nv 1 \\\r\n 0 0 # the second corner\r\nv -.0 +1. 25e2 1\nv 1e-400 0 0\n"
+      "vt 0 0\nvt 1E+0 0\nvt 0 1\nvt 3.4028234e38 0\nf 1/1 2/2 3/3\n");
+  TriangleMesh m;
+  ASSERT_NO_THROW(m = load_mesh(good)) << error_of(good);
+  ASSERT_EQ(m.num_triangles(), 1u);
+  float max_x = 0, max_z = 0;
+  for (const Vec3& p : m.positions) {
+    max_x = std::max(max_x, p.x);
+    max_z = std::max(max_z, p.z);
+  }
+  EXPECT_EQ(max_x, 1.0f);
+  EXPECT_EQ(max_z, 2500.0f);
 }
 
 // assimp 5.2's PLY reader hangs on a header that never reaches end_header
