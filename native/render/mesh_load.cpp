@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <sstream>
 #include <string_view>
@@ -42,6 +43,54 @@ int ply_type_bytes(const std::string& t) {
   return 0;
 }
 
+// Whether `t` is a decimal number as OBJ and PLY files write them: [+-] digits [. digits]
+// [e [+-] digits], with digits on at least one side of the point.
+bool is_decimal(std::string_view t) {
+  size_t i = 0, digits = 0;
+  const auto run = [&] {
+    const size_t s = i;
+    while (i < t.size() && t[i] >= '0' && t[i] <= '9') ++i;
+    return i - s;
+  };
+  if (i < t.size() && (t[i] == '+' || t[i] == '-')) ++i;
+  digits += run();
+  if (i < t.size() && t[i] == '.') {
+    ++i;
+    digits += run();
+  }
+  if (digits == 0) return false;
+  if (i < t.size() && (t[i] == 'e' || t[i] == 'E')) {
+    ++i;
+    if (i < t.size() && (t[i] == '+' || t[i] == '-')) ++i;
+    if (run() == 0) return false;
+  }
+  return i == t.size();
+}
+
+// Whether the decimal number `t` (is_decimal) is finite in single
+// precision; one too small for a double is 0, which is.
+bool finite_as_float(std::string_view t) {
+  const char* b = t.data() + (t[0] == '+' ? 1 : 0);
+  double x = 0;
+  const auto r = std::from_chars(b, t.data() + t.size(), x);
+  if (r.ec == std::errc()) return std::fabs(x) <= double(std::numeric_limits<float>::max());
+  // Out of a double's range: too large when the point's place, moved by the
+  // exponent, lies right of the first digit (the exponent saturates)
+  const size_t e = t.find_first_of("eE");
+  const std::string_view m = t.substr(0, e);
+  const size_t lead = m.find_first_of("123456789");
+  const size_t point = std::min(m.find('.'), m.size());
+  long exp10 = 0;
+  if (e != std::string_view::npos) {
+    // (is_decimal: an exponent has digits after its sign)
+    const bool sign = t[e + 1] == '+' || t[e + 1] == '-';
+    for (size_t i = e + 1 + (sign ? 1 : 0); i < t.size(); ++i)
+      exp10 = std::min(exp10 * 10 + (t[i] - '0'), 100000L);
+    if (t[e + 1] == '-') exp10 = -exp10;
+  }
+  return lead == std::string_view::npos || long(point) - long(lead) + exp10 <= 0;
+}
+
 // assimp 5.2's PLY reader does not stop on a header that never reaches
 // end_header (it keeps seeking through the file: a hang), and trusts its
 // element counts. A file that starts as PLY gets its header checked here
@@ -61,6 +110,7 @@ void check_ply_header(const std::string& path) {
     std::string name;
     uint64_t count = 0, min_bytes = 0;  // entries; bytes each takes at least
     std::vector<bool> lists;             // per property: a list?
+    std::vector<std::string> names;      // per property
   };
   std::vector<Element> elements;
   bool binary = false, have_format = false, ended = false;
@@ -120,6 +170,7 @@ void check_ply_header(const std::string& path) {
         bad("expected 'property TYPE NAME' or 'property list TYPE TYPE NAME', got '" + text + "'");
       elements.back().min_bytes += binary ? uint64_t(ply_type_bytes(list ? tok[2] : tok[1])) : 1;
       elements.back().lists.push_back(list);
+      elements.back().names.push_back(tok.back());
     } else if (kw == "end_header") {
       ended = true;
     } else {
@@ -143,79 +194,58 @@ void check_ply_header(const std::string& path) {
   // ASCII data: every list's length must fit in the values left. assimp 5.2
   // takes a long time over a list longer than the file (13 s for a 290-byte
   // file whose face claimed 30,022 indices: found by fuzz_mesh, 2026-12-03).
+  // And every value must be a decimal number finite in single precision
+  // (is_decimal, finite_as_float): assimp reads a word as 0 and passes nan
+  // and inf through, without a word; the error names the line and value.
   // The values are streamed, not kept.
   in.clear();
   in.seekg(static_cast<std::streamoff>(pos));
-  const auto values_left = [&in] {
+  std::istreambuf_iterator<char> it(in);
+  const std::istreambuf_iterator<char> end;
+  size_t at_line = size_t(line) + 1, token_line = 0;  // (the data starts after end_header's line)
+  const auto space = [](char c) { return std::isspace(static_cast<unsigned char>(c)) != 0; };
+  // The next value (its first 64 bytes, and a 65th if there are more), or false at the end.
+  const auto next = [&](std::string& t) {
+    t.clear();
+    for (; it != end && space(*it); ++it)
+      if (*it == '\n') ++at_line;
+    token_line = at_line;
+    for (; it != end && !space(*it); ++it)
+      if (t.size() <= 64) t += *it;
+    return !t.empty();
+  };
+  const auto values_left = [&] {
     uint64_t n = 0;
-    for (std::string t; in >> t;) ++n;
+    for (std::string t; next(t);) ++n;
     return n;
   };
-  std::string v;
+  const auto check = [&](const std::string& t, const Element& e, uint64_t i, size_t p) {
+    const bool decimal = t.size() <= 64 && is_decimal(t);
+    if (decimal && finite_as_float(t)) return;
+    fail(path, "line " + std::to_string(token_line) + ": '" + t.substr(0, 40) + "' for property '" + e.names[p] +
+                   "' of '" + e.name + "' element " + std::to_string(i) + " is not " +
+                   (decimal ? "finite in single precision" : "a number"));
+  };
+  std::string v, t;
   for (const Element& e : elements)
     for (uint64_t i = 0; i < e.count; ++i)
-      for (const bool list : e.lists) {
-        if (!(in >> v))
+      for (size_t p = 0; p < e.lists.size(); ++p) {
+        if (!next(v))
           fail(path, "the PLY data ends inside '" + e.name + "' element " + std::to_string(i) + " of " +
                          std::to_string(e.count));
-        if (!list) continue;
+        if (!e.lists[p]) {
+          check(v, e, i, p);
+          continue;
+        }
         const bool number = !v.empty() && v.size() <= 10 && v.find_first_not_of("0123456789") == std::string::npos;
         const uint64_t n = number ? std::stoull(v) : 0;
         uint64_t k = 0;
-        for (std::string t; k < n && in >> t;) ++k;
+        for (; k < n && next(t); ++k) check(t, e, i, p);
         if (!number || k < n)
           fail(path, "'" + e.name + "' element " + std::to_string(i) + " has a list of length '" + v +
                          "', more than the values left in the file (" + std::to_string(number ? k : values_left()) +
                          ")");
       }
-}
-
-// Whether `t` is a decimal number as OBJ writes them: [+-] digits [. digits]
-// [e [+-] digits], with digits on at least one side of the point.
-bool is_decimal(std::string_view t) {
-  size_t i = 0, digits = 0;
-  const auto run = [&] {
-    const size_t s = i;
-    while (i < t.size() && t[i] >= '0' && t[i] <= '9') ++i;
-    return i - s;
-  };
-  if (i < t.size() && (t[i] == '+' || t[i] == '-')) ++i;
-  digits += run();
-  if (i < t.size() && t[i] == '.') {
-    ++i;
-    digits += run();
-  }
-  if (digits == 0) return false;
-  if (i < t.size() && (t[i] == 'e' || t[i] == 'E')) {
-    ++i;
-    if (i < t.size() && (t[i] == '+' || t[i] == '-')) ++i;
-    if (run() == 0) return false;
-  }
-  return i == t.size();
-}
-
-// Whether the decimal number `t` (is_decimal) is finite in single
-// precision; one too small for a double is 0, which is.
-bool finite_as_float(std::string_view t) {
-  const char* b = t.data() + (t[0] == '+' ? 1 : 0);
-  double x = 0;
-  const auto r = std::from_chars(b, t.data() + t.size(), x);
-  if (r.ec == std::errc()) return std::fabs(x) <= double(std::numeric_limits<float>::max());
-  // Out of a double's range: too large when the point's place, moved by the
-  // exponent, lies right of the first digit (the exponent saturates)
-  const size_t e = t.find_first_of("eE");
-  const std::string_view m = t.substr(0, e);
-  const size_t lead = m.find_first_of("123456789");
-  const size_t point = std::min(m.find('.'), m.size());
-  long exp10 = 0;
-  if (e != std::string_view::npos) {
-    // (is_decimal: an exponent has digits after its sign)
-    const bool sign = t[e + 1] == '+' || t[e + 1] == '-';
-    for (size_t i = e + 1 + (sign ? 1 : 0); i < t.size(); ++i)
-      exp10 = std::min(exp10 * 10 + (t[i] - '0'), 100000L);
-    if (t[e + 1] == '-') exp10 = -exp10;
-  }
-  return lead == std::string_view::npos || long(point) - long(lead) + exp10 <= 0;
 }
 
 // OBJ text: every value of a vertex line ('v', 'vt', 'vn') must be a

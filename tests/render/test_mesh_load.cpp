@@ -155,14 +155,17 @@ TEST(MeshLoad, Errors) {
   EXPECT_NE(error_of(inf).find("inf.obj: line 3: '1e999' in a 'v' line is not finite in single precision"),
             std::string::npos)
       << error_of(inf);
-  // (assimp's PLY reader passes non-finite values through: they are found
-  // in what it read)
+  // (an ASCII PLY file's values are checked before assimp reads them, each
+  // named by its line, property and element; in a binary one they are
+  // found in what assimp read, named by the vertex)
   const std::string nan_uv = test::write_file(
       dir, "nanuv.ply",
       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
       "property float s\nproperty float t\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
       "0 0 0 0 0\n1 0 0 nan 0\n0 1 0 0 1\n3 0 1 2\n");
-  EXPECT_NE(error_of(nan_uv).find("nanuv.ply: vertex 1 has a non-finite UV"), std::string::npos) << error_of(nan_uv);
+  EXPECT_NE(error_of(nan_uv).find("nanuv.ply: line 13: 'nan' for property 's' of 'vertex' element 1 is not a number"),
+            std::string::npos)
+      << error_of(nan_uv);
   const std::string nan_n = test::write_file(dir, "nann.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 nan\nf 1//1 2//1 3//1\n");
   EXPECT_NE(error_of(nan_n).find("nann.obj: line 4: 'nan' in a 'vn' line is not a number"), std::string::npos)
       << error_of(nan_n);
@@ -172,8 +175,30 @@ TEST(MeshLoad, Errors) {
       "property float nx\nproperty float ny\nproperty float nz\nelement face 1\n"
       "property list uchar int vertex_indices\nend_header\n"
       "0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 nan 1\n3 0 1 2\n");
-  EXPECT_NE(error_of(nan_pn).find("nanpn.ply: vertex 2 has a non-finite normal"), std::string::npos)
+  EXPECT_NE(error_of(nan_pn).find("nanpn.ply: line 15: 'nan' for property 'ny' of 'vertex' element 2 is not a number"),
+            std::string::npos)
       << error_of(nan_pn);
+  // a word, a value beyond single precision, a face index that is no number
+  const std::string ply_head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string word = test::write_file(dir, "word.ply", ply_head + "0 0 0\n1 zero 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_NE(error_of(word).find("word.ply: line 11: 'zero' for property 'y' of 'vertex' element 1 is not a number"),
+            std::string::npos)
+      << error_of(word);
+  const std::string big = test::write_file(dir, "big.ply", ply_head + "0 0 0\n1 0 0\n0 1 -1e39\n3 0 1 2\n");
+  EXPECT_NE(error_of(big).find("big.ply: line 12: '-1e39' for property 'z' of 'vertex' element 2 is not finite"),
+            std::string::npos)
+      << error_of(big);
+  const std::string index = test::write_file(dir, "index.ply", ply_head + "0 0 0\n1 0 0\n0 1 0\n\n3 0 1 two\n");
+  EXPECT_NE(error_of(index).find("index.ply: line 14: 'two' for property 'vertex_indices' of 'face' element 0 is not "
+                                 "a number"),
+            std::string::npos)
+      << error_of(index);
+  // and what is fine: signs, exponents, a point on either side, CRLF
+  const std::string fine =
+      test::write_file(dir, "fine.ply", ply_head + "0 0 0\r\n1.5e0 -0 .0\r\n0 +1. 1E-400\r\n3 0 1 2\r\n");
+  EXPECT_EQ(error_of(fine), "(no error)");
   const std::string zero_n = test::write_file(dir, "zeron.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nf 1//1 2//1 3//1\n");
   EXPECT_NE(error_of(zero_n).find("zeron.obj: vertex 0 has a zero-length normal"), std::string::npos) << error_of(zero_n);
 }
