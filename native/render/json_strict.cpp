@@ -1,6 +1,5 @@
 #include "render/json_strict.h"
 
-#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <string_view>
@@ -51,11 +50,8 @@ std::string frames_path(const std::vector<ParseFrame>& stack, size_t depth) {
 }
 }  // namespace
 
-JsonPositions::JsonPositions(const std::string& text) {
+JsonPositions::JsonPositions(const std::string& text) : text_(text) {
   const size_t n = text.size();
-  line_starts_.push_back(0);
-  for (size_t i = 0; i < n; ++i)
-    if (text[i] == '\n') line_starts_.push_back(i + 1);
 
   struct Open {
     bool object;
@@ -155,18 +151,12 @@ JsonPositions::JsonPositions(const std::string& text) {
   }
 }
 
-void JsonPositions::line_col(size_t byte, int& line, int& column) const {
-  const auto it = std::upper_bound(line_starts_.begin(), line_starts_.end(), byte);
-  line = int(it - line_starts_.begin());
-  column = int(byte - *(it - 1)) + 1;
-}
-
 bool JsonPositions::locate(const std::string& path, int& line, int& column) const {
   std::string p = path == "(top level)" ? std::string() : path;
   for (;;) {
     const auto it = at_.find(p);
     if (it != at_.end()) {
-      line_col(it->second, line, column);
+      line_col(text_, it->second, line, column);
       return true;
     }
     if (p.empty()) return false;
@@ -179,7 +169,7 @@ bool JsonPositions::locate(const std::string& path, int& line, int& column) cons
 bool JsonPositions::locate_duplicate(const std::string& path, int& line, int& column) const {
   const auto it = duplicate_.find(path);
   if (it == duplicate_.end()) return false;
-  line_col(it->second, line, column);
+  line_col(text_, it->second, line, column);
   return true;
 }
 

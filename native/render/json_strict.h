@@ -52,9 +52,8 @@ class JsonPositions {
   SceneError locate(const SceneError& e, const std::string& file) const;
 
  private:
-  void line_col(size_t byte, int& line, int& column) const;
-  std::map<std::string, size_t> at_, duplicate_;
-  std::vector<size_t> line_starts_;
+  std::string text_;
+  std::map<std::string, size_t> at_, duplicate_;  // byte offsets
 };
 
 // An allowed interval for a number, with a printable description.

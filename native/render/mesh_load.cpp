@@ -34,6 +34,13 @@ Transform to_transform(const aiMatrix4x4& m) {
   throw MeshError(file + ": " + msg);
 }
 
+// The file name's extension in lower case (".ply"); assimp picks a reader by it.
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
 // Bytes of a PLY scalar type in binary files; 0 for an unknown name.
 int ply_type_bytes(const std::string& t) {
   if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
@@ -102,10 +109,8 @@ void check_ply_header(const std::string& path) {
   std::string head(65536, '\0');
   in.read(&head[0], static_cast<std::streamsize>(head.size()));
   head.resize(static_cast<size_t>(in.gcount()));
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   // (assimp takes a file for PLY by its extension or its first three bytes)
-  if (head.compare(0, 3, "ply") != 0 && ext != ".ply") return;
+  if (head.compare(0, 3, "ply") != 0 && lower_extension(path) != ".ply") return;
   struct Element {
     std::string name;
     uint64_t count = 0, min_bytes = 0;  // entries; bytes each takes at least
@@ -254,9 +259,7 @@ void check_ply_header(const std::string& path) {
 // UVs, and reads a word as 0, all without a word; this names the line and
 // the value instead. A line ending in a backslash continues on the next.
 void check_obj_numbers(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (ext != ".obj") return;
+  if (lower_extension(path) != ".obj") return;
   std::ifstream in(path, std::ios::binary);
   std::string line, part;
   size_t number = 0;
