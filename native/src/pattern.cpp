@@ -71,9 +71,15 @@ void append_row(const std::string& source, const std::vector<int>& src, size_t r
 
 }  // namespace
 
+// "src:3:5: message", or "src: message" for the whole source (line 0)
+static std::string pattern_error_text(const std::string& source, int line, int column, const std::string& message) {
+  std::string at = source;
+  if (line > 0) at += ":" + std::to_string(line) + (column > 0 ? ":" + std::to_string(column) : std::string());
+  return at + ": " + message;
+}
+
 PatternError::PatternError(std::string source, int line, int column, const std::string& message)
-    : std::runtime_error(source + ":" + std::to_string(line) + ":" + std::to_string(column) + ": " +
-                         message),
+    : std::runtime_error(pattern_error_text(source, line, column, message)),
       source_(std::move(source)),
       line_(line),
       column_(column),

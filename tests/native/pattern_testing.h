@@ -12,15 +12,16 @@
 namespace knit_test {
 
 // Succeeds when `f` throws a PatternError whose what() is exactly
-// "<source>:<line>:<column>: <message>" and whose accessors agree.
+// "<source>:<line>:<column>: <message>" ("<source>: <message>" for line 0:
+// no position) and whose accessors agree.
 inline testing::AssertionResult ThrowsPatternError(const std::function<void()>& f,
                                                    const std::string& source, int line, int column,
                                                    const std::string& message) {
   try {
     f();
   } catch (const knit::PatternError& e) {
-    std::string want =
-        source + ":" + std::to_string(line) + ":" + std::to_string(column) + ": " + message;
+    const std::string want =
+        (line == 0 ? source : source + ":" + std::to_string(line) + ":" + std::to_string(column)) + ": " + message;
     if (want == e.what() && e.source() == source && e.line() == line && e.column() == column &&
         e.message() == message) {
       return testing::AssertionSuccess();

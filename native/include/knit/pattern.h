@@ -18,8 +18,9 @@ namespace knit {
 enum class Stitch : int32_t { Knit = 0, Purl = 1, Front = 2, Back = 3 };
 
 // A parse or validation error that names where the input went wrong.
-// what() reads "<source>:<line>:<column>: <message>" (line/column 1-based;
-// 0 when the error is not tied to a position).
+// what() reads "<source>:<line>:<column>: <message>" (line/column 1-based),
+// or "<source>: <message>" when the error is not tied to a position (line
+// and column 0).
 class PatternError : public std::runtime_error {
  public:
   PatternError(std::string source, int line, int column, const std::string& message);
