@@ -194,10 +194,10 @@ json parse_json_strict(const std::string& text, const std::string& file) {
         ParseFrame& f = stack.back();
         std::string k = parsed.get<std::string>();
         if (!f.keys.insert(k).second) {
-          std::string where = frames_path(stack, stack.size());
-          if (where.empty()) where = "(top level)";
+          const std::string object = frames_path(stack, stack.size());
+          const std::string where = object.empty() ? std::string("(top level)") : object;
           int line = 0, col = 0;
-          if (JsonPositions(text).locate_duplicate(json_child_path(frames_path(stack, stack.size()), k), line, col))
+          if (JsonPositions(text).locate_duplicate(json_child_path(object, k), line, col))
             throw SceneError(file, line, col, where, "duplicate key '" + k + "'");
           throw SceneError(file, where, "duplicate key '" + k + "'");
         }
