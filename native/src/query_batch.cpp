@@ -101,6 +101,7 @@ bool cpu_has_avx512() {
 struct Work {
   // stage 1: candidates, in row and piece order for each point
   std::vector<int32_t> pt, row, piece;
+  std::vector<float> cx, cy;  // (and the point's x and y, so that no later stage gathers them)
   // stage 2: each candidate's closest-point parameter (kBig: none within m),
   // whether the line passes through the tube there, and (stage 2b) whether
   // its entry is searched
@@ -125,7 +126,7 @@ struct Work {
     if (pt.size() >= cap) return;
     for (auto* v : {&pt, &row, &piece, &inside, &use, &l_c, &l_cs, &l_k, &l_bits, &o_slot, &o_col, &l_off, &l_csm})
       v->resize(2 * cap, 0);
-    for (auto* v : {&t, &l_t, &l_x, &l_y, &o_sin, &o_nx, &o_ny, &o_nz, &o_tx, &o_ty, &o_tz})
+    for (auto* v : {&cx, &cy, &t, &l_t, &l_x, &l_y, &o_sin, &o_nx, &o_ny, &o_nz, &o_tx, &o_ty, &o_tz})
       v->resize(2 * cap, 0.0f);
   }
 };
