@@ -8,10 +8,13 @@
 //      chord bound does not rule it out (knit_line_query's culls, in the
 //      same order), out of the few pairs the point's bin lists
 //      (CandidateBins below). Lanes that pass are compressed into a list,
-//      so the costly stages below run on full vectors of live work.
+//      with their point's x and y, so the costly stages below run on full
+//      vectors of live work and gather nothing by point.
 //   2. closest points: the cubic of the piece's interpolant (Cardano or
 //      Viete, as cubic.h), one Newton step on the exact curve, and whether
-//      the line passes through the tube there.
+//      the line passes through the tube there (from the curve's Taylor
+//      expansion before the step wherever its error bound leaves no doubt,
+//      so the same answer as evaluating the curve again).
 //   2b. per point, in row and piece order, the kernel's de-duplication: a
 //      crossing found again from the next piece, or a closest point outside
 //      the tube, is not searched.
