@@ -39,7 +39,7 @@ summary) to OUT_DIR.
                                         [--repeats N]
 
 PARTS: comma-separated, of half_cylinder, garment, garment_alone, far_view,
-overhead (all by default), instructions (only when named; --paper-far-view
+close_up, overhead (all by default), instructions (only when named; --paper-far-view
 adds the environment-only far views).
 
 On the garment (the scarf over a bar, on a floor) the error is measured twice:
@@ -327,7 +327,7 @@ def main():
         sys.exit(2)
     quick = "--quick" in sys.argv
     b = Bench(sys.argv[1], sys.argv[2], quick)
-    parts = {"half_cylinder", "garment", "garment_alone", "far_view", "overhead"}
+    parts = {"half_cylinder", "garment", "garment_alone", "far_view", "close_up", "overhead"}
     if "--only" in sys.argv:
         parts = set(sys.argv[sys.argv.index("--only") + 1].split(","))
     repeats = 3
@@ -428,6 +428,17 @@ def main():
                 "far_" + name, ms, nf, "multi_scale", "near_field", ladder, ref_spp, tag_b="far_nf_" + name)
             b.results["far_view_" + name + "_16_points"] = b.equal_quality(
                 "far16_" + name, ms16, nf, "multi_scale", "near_field", ladder, ref_spp, tag_b="far_nf_" + name)
+
+    # 3c. Close-ups (the paper's Table 2 rows ii): the near field against
+    # explicit yarns where a pixel sees a fraction of a stitch, on the half
+    # cylinder's close-up (front and back light) and the flat swatch's.
+    if "close_up" in parts:
+        hcc = sized(load("half_cylinder_closeup.json"), size, size)
+        b.results["close_up_half_cylinder"] = b.equal_quality(
+            "closeup_half_cylinder", hcc, hcc, "model", "explicit", ladder, ref_spp, explicit_b=True)
+        swc = sized(load("swatch_closeup.json"), size, int(size * 0.75))
+        b.results["close_up_swatch"] = b.equal_quality(
+            "closeup_swatch", swc, swc, "model", "explicit", ladder, ref_spp, explicit_b=True)
 
     # 4. Overhead of the knit material against diffuse, same mesh, lights and samples.
     overhead_scenes = {
