@@ -110,12 +110,12 @@ struct Work {
   // its entry is searched
   std::vector<float> t;
   std::vector<int32_t> inside, use;
-  // stage 2c -> 3: the crossings to search, in candidate order: candidate,
-  // parameter, point, span column, row (its centre follows from it), the
+  // stage 2c -> 3: the crossings to search, in candidate order: parameter,
+  // the point's x and y, the point, span column, row (its centre follows from it), the
   // depth bits of the span's three cells (3 bits each), the row's offset in
   // codes[] and the span column's place in the pattern row
   std::vector<float> l_t, l_x, l_y;
-  std::vector<int32_t> l_c, l_cs, l_k, l_bits, l_off, l_csm;
+  std::vector<int32_t> l_pt, l_cs, l_k, l_bits, l_off, l_csm;
   // stage 3: entries, in the order the lanes finish them, with their live
   // slot: whether a crossing was found, the entry distance below the shell
   // top, and the column, normal and tangent there
@@ -127,7 +127,7 @@ struct Work {
   void reserve(size_t need) {
     const size_t cap = need + 32;
     if (pt.size() >= cap) return;
-    for (auto* v : {&pt, &row, &piece, &inside, &use, &l_c, &l_cs, &l_k, &l_bits, &o_slot, &o_col, &l_off, &l_csm})
+    for (auto* v : {&pt, &row, &piece, &inside, &use, &l_pt, &l_cs, &l_k, &l_bits, &o_slot, &o_col, &l_off, &l_csm})
       v->resize(2 * cap, 0);
     for (auto* v : {&cx, &cy, &t, &l_t, &l_x, &l_y, &o_sin, &o_nx, &o_ny, &o_nz, &o_tx, &o_ty, &o_tz})
       v->resize(2 * cap, 0.0f);
