@@ -111,7 +111,7 @@ struct Work {
   std::vector<float> t;
   std::vector<int32_t> inside, use;
   // stage 2c -> 3: the crossings to search, in candidate order: parameter,
-  // the point's x and y, the point, span column, row (its centre follows from it), the
+  // the point's x and y, its index, span column, row (its centre follows from it), the
   // depth bits of the span's three cells (3 bits each), the row's offset in
   // codes[] and the span column's place in the pattern row
   std::vector<float> l_t, l_x, l_y;
