@@ -39,8 +39,16 @@ summary) to OUT_DIR.
                                         [--repeats N]
 
 PARTS: comma-separated, of half_cylinder, garment, garment_alone, far_view,
-close_up, overhead (all by default), instructions (only when named; --paper-far-view
-adds the environment-only far views).
+close_up, overhead (all by default), instructions and resolution (only when
+named; --paper-far-view adds the environment-only far views).
+
+  resolution      (not in the default set, about 25 minutes) the half
+                  cylinder's equal quality against explicit yarns at 256 and
+                  512 pixels (the example's own is 480), multi-scale and near
+                  field: where the footprints fall below the class table's
+                  half a cell, multi-scale shades them as the near field, and
+                  its lead over explicit yarns goes with them. References of
+                  256 samples, ladder 1 to 32.
 
 On the garment (the scarf over a bar, on a floor) the error is measured twice:
 over the whole image, where the floor and bar's lighting noise (the same for
@@ -439,6 +447,20 @@ def main():
         swc = sized(load("swatch_closeup.json"), size, int(size * 0.75))
         b.results["close_up_swatch"] = b.equal_quality(
             "closeup_swatch", swc, swc, "model", "explicit", ladder, ref_spp, explicit_b=True)
+
+    # 3d. (only when named) The half cylinder at higher resolutions: the
+    # share of footprints the class table serves falls with the pixel, and
+    # the model's speed against explicit yarns with it.
+    if "resolution" in parts:
+        for px in (256, 512):
+            hr = sized(hc, px, px)
+            rladder, rref = [1, 2, 4, 8, 16, 32], 256
+            b.results[f"resolution_{px}_multi_scale"] = b.equal_quality(
+                f"res{px}_ms", multi_scale(hr), hr, "model_multi_scale", "explicit", rladder, rref,
+                explicit_b=True, tag_b=f"res{px}_explicit")
+            b.results[f"resolution_{px}_near_field"] = b.equal_quality(
+                f"res{px}_nf", hr, hr, "model", "explicit", rladder, rref, explicit_b=True,
+                tag_b=f"res{px}_explicit")
 
     # 4. Overhead of the knit material against diffuse, same mesh, lights and samples.
     overhead_scenes = {

@@ -1178,7 +1178,7 @@ CAPM ray) or 'multi_scale' (footprint aggregation, p_delta, LEAN-widened
 roughness, mixed colours). footprint_table: multi-scale footprints of a
 stitch cell or more are aggregated from a per-class table built here
 (docs/multiscale.md) instead of CAPM marches (not for patterns with slip
-stitches). table_min_cells, in [0.5, 1]: the smallest footprint, in
+stitches). table_min_cells, in [0.25, 1]: the smallest footprint, in
 stitch cells in both directions, the table serves; below a cell it reads
 the table's sub-cell statistics. table_bsdf: the table's footprints are
 shaded with a tabulated BSDF built with it (the near field's shading and

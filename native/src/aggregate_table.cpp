@@ -626,7 +626,7 @@ int64_t floor_div(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1)
 bool FootprintTable::sub_box(float x, float y, float ex, float ey, const k::KnitGeom& g) {
   // (1e9 pattern units: beyond the kernel's own float range, and the
   // sub-cell indices stay far inside int64)
-  if (!(ex >= 0.5f && ey >= 0.5f) || !(ex <= float(kMaxSubBox) && ey <= float(kMaxSubBox)) ||
+  if (!(ex >= kMinSubBox && ey >= kMinSubBox) || !(ex <= float(kMaxSubBox) && ey <= float(kMaxSubBox)) ||
       !(std::fabs(x) <= 1e9f && std::fabs(y) <= 1e9f))
     return false;
   const SubRange rx = sub_range(x, ex, K_2PI, kSub), ry = sub_range(y, ey, g.row_spacing, kSub);

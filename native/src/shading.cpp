@@ -64,8 +64,8 @@ void KnitMaterialParams::validate() const {
   };
   if (!std::isfinite(uv_scale) || !(uv_scale > 0) || uv_scale > 1e6f)
     bad("uv_scale", num(uv_scale), "must be finite, > 0 and at most 1e6");
-  if (!(table_min_cells >= 0.5f && table_min_cells <= 1.0f))
-    bad("table_min_cells", num(table_min_cells), "must be in [0.5, 1]");
+  if (!(table_min_cells >= FootprintTable::kMinSubBox && table_min_cells <= 1.0f))
+    bad("table_min_cells", num(table_min_cells), "must be in [0.25, 1]");
   if (footprint_points < 1 || footprint_points > KNIT_MS_MAX_POINTS)
     bad("footprint_points", std::to_string(footprint_points), "must be in [1, 64]");
   if (capm_options.max_steps < 1 || capm_options.max_steps > 4096)

@@ -818,7 +818,12 @@ class KnitMaterialMultiScale(unittest.TestCase):
         small = m.shade(u, v, d, footprint=[2.0, 0.0, 0.0, 1.5])  # 0.32 x 0.33 cells: the near field
         for key in nf:
             np.testing.assert_array_equal(small[key], nf[key], err_msg=key)
-        for bad in (0.3, 1.5, float("nan")):
+        # table_min_cells=0.25, the sub-cells' own size: that footprint from
+        # the table too.
+        quarter = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0,
+                                         table_min_cells=0.25)
+        self.assertTrue(np.all(quarter.shade(u, v, d, footprint=[2.0, 0.0, 0.0, 1.5])["steps"] == 0))
+        for bad in (0.2, 1.5, float("nan")):
             with self.assertRaisesRegex(ValueError, "table_min_cells"):
                 knitshade.KnitMaterial(seed_pattern(), mode="multi_scale", table_min_cells=bad)
 

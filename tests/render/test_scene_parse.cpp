@@ -314,9 +314,9 @@ TEST(SceneParse, KnitParameterRanges) {
             std::string::npos);
   EXPECT_NE(knit_error("footprint_points", 0).find("materials.wool.footprint_points: must be in [1, 64], got 0"),
             std::string::npos);
-  EXPECT_NE(knit_error("table_min_cells", 0.25).find("materials.wool.table_min_cells: must be in [0.5, 1], got 0.25"),
+  EXPECT_NE(knit_error("table_min_cells", 0.2).find("materials.wool.table_min_cells: must be in [0.25, 1], got 0.2"),
             std::string::npos)
-      << knit_error("table_min_cells", 0.25);
+      << knit_error("table_min_cells", 0.2);
   EXPECT_NE(knit_error("table_min_cells", "half").find("materials.wool.table_min_cells"), std::string::npos);
   EXPECT_NE(knit_error("bsdf", {{"roughness_x", 0}}).find("materials.wool.bsdf.roughness_x: must be in (0, 1], got 0"),
             std::string::npos);

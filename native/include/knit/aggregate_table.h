@@ -119,12 +119,13 @@ class FootprintTable {
   // from the same rays, stored as bfloat16), and a
   // box of ex x ey cells centred on pattern point (x, y) is the sum over
   // the sub-cells it overlaps, each weighted by the area of the overlap.
-  // Its domain: at least half a cell in both directions and at most
-  // kMaxSubBox sub-cells touched (sub_box). Bigger boxes take aggregate()'s
+  // Its domain: at least kMinSubBox (a quarter) of a cell in both
+  // directions and at most kMaxSubBox sub-cells touched (sub_box). Bigger boxes take aggregate()'s
   // whole cells. `pick` in [0, 1) picks the colour of one hit sub-cell for
   // patterns with more colours than the histogram has bins.
   static constexpr int kSub = 4;
   static constexpr int kMaxSubBox = 64;
+  static constexpr float kMinSubBox = 0.25f;  // cells: one sub-cell on a side
   static bool sub_box(float x, float y, float ex, float ey, const k::KnitGeom& g);
   // slot_hits (kClasses floats, zeroed by the caller, when given): per
   // class slot, the box's area share of that class times its sub-cells'

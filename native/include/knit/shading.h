@@ -39,7 +39,7 @@ struct KnitMaterialParams {
   int footprint_points = 4;     // multi-scale Sobol' points per cell-sized footprint (docs/multiscale.md)
   bool footprint_table = true;  // multi-scale footprints of a cell or more: the class table, not marches
   // Multi-scale with the class table: the smallest footprint, in stitch
-  // cells in both directions, that the table serves, in [0.5, 1]. Below 1,
+  // cells in both directions, that the table serves, in [0.25, 1]. Below 1,
   // footprints of table_min_cells up to a cell come from its sub-cell
   // statistics (docs/multiscale.md, "Footprints below a cell: sub-cells").
   float table_min_cells = 0.5f;
