@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -79,6 +80,26 @@ TEST(Examples, SwatchesFarAndDistantAreInTheirRegimes) {
     EXPECT_GE(share, c.min_table_share);
     EXPECT_LE(share, c.max_table_share);
   }
+}
+
+// The far swatch with table_min_cells 0.25: its footprints of a quarter to
+// half a cell come from the class table's sub-cells too (docs/multiscale.md,
+// "Footprints of a quarter cell").
+TEST(Examples, SwatchFarFromTheTableWithQuarterCells) {
+  SceneDesc d = load_scene_file(test::source_dir() + "/examples/scenes/swatch_far.json");
+  d.film.spp = 1;
+  for (MaterialDesc& m : d.materials) {
+    if (m.type != MaterialType::Knit) continue;
+    KnitMaterialParams p = m.knit.model->params();
+    p.table_min_cells = 0.25f;
+    m.knit.model = std::make_shared<const KnitMaterial>(m.knit.model->surface().pattern(), p);
+  }
+  const RenderResult r = test::render_desc(d).result;
+  ASSERT_GT(r.stats.resolves, 0u);
+  const double share = double(r.stats.table_resolves) / double(r.stats.resolves);
+  std::printf("[examples] swatch_far.json, table_min_cells 0.25: %.1f%% of %llu knit hits from the class table\n",
+              100 * share, static_cast<unsigned long long>(r.stats.resolves));
+  EXPECT_GE(share, 0.95);
 }
 
 }  // namespace
