@@ -130,6 +130,7 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
         if (pt.pass) ++stats.resolve_passes;
         if (pt.from_table) ++stats.table_resolves;
         if (pt.from_sub_cells) ++stats.sub_cell_resolves;
+        if (pt.quarter_cell) ++stats.quarter_cell_resolves;
         if (pt.aggregated) ++stats.aggregate_resolves;
       } else {
         // Where the interpolated normal puts the viewer on the other side than

@@ -57,6 +57,7 @@ struct PassThrough {
   Rgb weight{1.0f};
   bool from_table = false;  // the knit model read the hit from its multi-scale class table
   bool from_sub_cells = false;  // ... from the table's sub-cells
+  bool quarter_cell = false;    // ... shaded as the near field, but table_min_cells 0.25 would read it from the table
   bool aggregated = false;  // the knit model aggregated marches over the hit's multi-scale footprint
 };
 

@@ -166,6 +166,7 @@ PassThrough KnitModelMaterial::resolve(SurfaceInteraction& si, const RayDifferen
   const knit::KnitShade sh = model.shade(hit, to_kvec(ray.d), frame_.get(), {shift.x, shift.y}, u);
   pt.from_table = sh.from_table;
   pt.from_sub_cells = sh.from_sub_cells;
+  pt.quarter_cell = sh.quarter_cell;
   pt.aggregated = sh.aggregated;
   if (sh.pass_through) {
     pt.pass = true;  // no yarn along this ray: it goes on straight

@@ -102,6 +102,16 @@ std::string RenderReport::to_text() const {
                     table, table - sub, sub, aggregated, std::max(0.0, 100.0 - table - aggregated));
       s += buf;
     }
+    // A tenth or more of the hits shaded as the near field only for being
+    // below table_min_cells: say what would serve them from the table.
+    if (resolves > 0 && 10 * quarter_cell_resolves >= resolves) {
+      std::snprintf(buf, sizeof buf,
+                    "  hint        %.0f%% of the knit hits were multi-scale footprints of a quarter to half a "
+                    "stitch cell, shaded as the near field: \"table_min_cells\": 0.25 reads them from the class "
+                    "table (faster, a little blurrier; docs/multiscale.md)\n",
+                    100.0 * double(quarter_cell_resolves) / double(resolves));
+      s += buf;
+    }
     if (explicit_yarns) {
       std::snprintf(buf, sizeof buf,
                     "  yarns       explicit: %zu points, %zu segments, %zu curves (built in %.2f s); geometry %s, "
@@ -161,7 +171,7 @@ std::string RenderReport::to_json() const {
   j["knit"] = {{"materials", knit_materials}, {"explicit_yarns", explicit_yarns},
                {"hits", resolves}, {"hits_passed", resolve_passes}, {"shadow_crossings", shadow_resolves},
                {"shell_bounces", shell_bounces}, {"table_hits", table_resolves},
-               {"sub_cell_hits", sub_cell_resolves},
+               {"sub_cell_hits", sub_cell_resolves}, {"quarter_cell_near_field_hits", quarter_cell_resolves},
                {"aggregated_hits", aggregate_resolves}, {"marches_spared", marches_spared},
                {"yarn_points", yarn_points}, {"yarn_segments", yarn_segments}, {"yarn_curves", yarn_curves},
                {"yarn_build_seconds", yarn_build_seconds}};

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "render/renderer.h"
+#include "render/report.h"
 #include "render/scene.h"
 #include "render/scene_desc.h"
 #include "render_test_util.h"
@@ -82,24 +83,46 @@ TEST(Examples, SwatchesFarAndDistantAreInTheirRegimes) {
   }
 }
 
-// The far swatch with table_min_cells 0.25: its footprints of a quarter to
-// half a cell come from the class table's sub-cells too (docs/multiscale.md,
-// "Footprints of a quarter cell").
+// The far swatch at its default table_min_cells (0.5) shades most of its
+// footprints as the near field, and counts those of a quarter cell or more
+// (the report's hint names table_min_cells 0.25 then); with 0.25 they come
+// from the class table's sub-cells (docs/multiscale.md, "Footprints of a
+// quarter cell") and none is counted.
 TEST(Examples, SwatchFarFromTheTableWithQuarterCells) {
-  SceneDesc d = load_scene_file(test::source_dir() + "/examples/scenes/swatch_far.json");
-  d.film.spp = 1;
-  for (MaterialDesc& m : d.materials) {
-    if (m.type != MaterialType::Knit) continue;
-    KnitMaterialParams p = m.knit.model->params();
-    p.table_min_cells = 0.25f;
-    m.knit.model = std::make_shared<const KnitMaterial>(m.knit.model->surface().pattern(), p);
+  for (const float min_cells : {0.5f, 0.25f}) {
+    SCOPED_TRACE(min_cells);
+    SceneDesc d = load_scene_file(test::source_dir() + "/examples/scenes/swatch_far.json");
+    d.film.spp = 1;
+    for (MaterialDesc& m : d.materials) {
+      if (m.type != MaterialType::Knit) continue;
+      KnitMaterialParams p = m.knit.model->params();
+      ASSERT_EQ(p.table_min_cells, 0.5f);  // (the example's, the default)
+      p.table_min_cells = min_cells;
+      m.knit.model = std::make_shared<const KnitMaterial>(m.knit.model->surface().pattern(), p);
+    }
+    const RenderResult r = test::render_desc(d).result;
+    ASSERT_GT(r.stats.resolves, 0u);
+    const double table = double(r.stats.table_resolves) / double(r.stats.resolves);
+    const double quarter = double(r.stats.quarter_cell_resolves) / double(r.stats.resolves);
+    std::printf("[examples] swatch_far.json, table_min_cells %.2f: %.1f%% of %llu knit hits from the class table, "
+                "%.1f%% near field of a quarter cell or more\n",
+                min_cells, 100 * table, static_cast<unsigned long long>(r.stats.resolves), 100 * quarter);
+    RenderReport rep;
+    rep.resolves = r.stats.resolves;
+    rep.table_resolves = r.stats.table_resolves;
+    rep.quarter_cell_resolves = r.stats.quarter_cell_resolves;
+    rep.knit_materials = 1;
+    const bool hint = rep.to_text().find("\"table_min_cells\": 0.25") != std::string::npos;
+    if (min_cells == 0.5f) {
+      EXPECT_LE(table, 0.1);
+      EXPECT_GE(quarter, 0.8);
+      EXPECT_TRUE(hint) << rep.to_text();
+    } else {
+      EXPECT_GE(table, 0.95);
+      EXPECT_EQ(r.stats.quarter_cell_resolves, 0u);
+      EXPECT_FALSE(hint) << rep.to_text();
+    }
   }
-  const RenderResult r = test::render_desc(d).result;
-  ASSERT_GT(r.stats.resolves, 0u);
-  const double share = double(r.stats.table_resolves) / double(r.stats.resolves);
-  std::printf("[examples] swatch_far.json, table_min_cells 0.25: %.1f%% of %llu knit hits from the class table\n",
-              100 * share, static_cast<unsigned long long>(r.stats.resolves));
-  EXPECT_GE(share, 0.95);
 }
 
 }  // namespace

@@ -91,6 +91,10 @@ struct KnitShade {
   int steps = 0;             // CAPM segments marched (summed over footprint points)
   bool from_table = false;   // multi-scale: the footprint came from the class table (no march)
   bool from_sub_cells = false;  // ... from its sub-cells (a footprint below a cell)
+  // Multi-scale, shaded as the near field: the footprint was a quarter of a
+  // cell or more in both directions, so table_min_cells 0.25 would have
+  // read it from the table's sub-cells (the renderer's report counts them).
+  bool quarter_cell = false;
   bool aggregated = false;   // multi-scale: the footprint's points were marched and aggregated
   // Multi-scale from the class table with table_bsdf: shade with this
   // tabulated BSDF and mix, in the frame (st, sb, sn) of the base (the
