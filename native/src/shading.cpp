@@ -366,7 +366,8 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
 
   Vec3 fx, fy, e;
   const Route rt = route(hit, fx, fy, e);
-  sh.quarter_cell = rt == Route::NearField && table_ && FootprintTable::sub_box(x, y, e.x, e.y, surface_.geom());
+  sh.quarter_cell = rt == Route::NearField && params_.mode == KnitMode::MultiScale && table_ &&
+                    FootprintTable::sub_box(x, y, e.x, e.y, surface_.geom());  // (e is set in multi-scale only)
   if (table_bsdf_ && (rt == Route::Cells || rt == Route::SubCells) && table_->one_colour()) {
     // The tabulated BSDF of a footprint of one colour index needs only the
     // hit fractions: its p_delta and each class's share of its hits (the
