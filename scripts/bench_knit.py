@@ -49,7 +49,8 @@ named; --paper-far-view adds the environment-only far views).
                   the footprints fall below the class table's half a cell,
                   multi-scale shades them as the near field, and its lead
                   over explicit yarns goes with them. References of 256
-                  samples, ladder 1 to 32.
+                  samples, ladder 1 to 32; and the overhead of the 0.25
+                  material against its diffuse twin (16 samples).
 
 On the garment (the scarf over a bar, on a floor) the error is measured twice:
 over the whole image, where the floor and bar's lighting noise (the same for
@@ -467,6 +468,8 @@ def main():
             b.results[f"resolution_{px}_near_field"] = b.equal_quality(
                 f"res{px}_nf", hr, hr, "model", "explicit", rladder, rref, explicit_b=True,
                 tag_b=f"res{px}_explicit")
+            # and the overhead of the quarter cells against the diffuse twin, 16 samples
+            b.results[f"resolution_{px}_overhead_quarter"] = b.overhead(f"oh_res{px}_ms25", quarter, 16, repeats)
 
     # 4. Overhead of the knit material against diffuse, same mesh, lights and samples.
     overhead_scenes = {
