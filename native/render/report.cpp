@@ -106,9 +106,9 @@ std::string RenderReport::to_text() const {
     // below table_min_cells: say what would serve them from the table.
     if (resolves > 0 && 10 * quarter_cell_resolves >= resolves) {
       std::snprintf(buf, sizeof buf,
-                    "  hint        %.0f%% of the knit hits were multi-scale footprints of a quarter to half a "
-                    "stitch cell, shaded as the near field: \"table_min_cells\": 0.25 reads them from the class "
-                    "table (faster, a little blurrier; docs/multiscale.md)\n",
+                    "  hint        %.0f%% of the knit hits were multi-scale footprints of a quarter of a stitch "
+                    "cell or more, below table_min_cells, shaded as the near field: \"table_min_cells\": 0.25 "
+                    "reads them from the class table (faster, a little blurrier; docs/multiscale.md)\n",
                     100.0 * double(quarter_cell_resolves) / double(resolves));
       s += buf;
     }
