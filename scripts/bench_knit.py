@@ -42,7 +42,7 @@ PARTS: comma-separated, of half_cylinder, garment, garment_alone, far_view,
 close_up, overhead (all by default), instructions and resolution (only when
 named; --paper-far-view adds the environment-only far views).
 
-  resolution      (not in the default set, about 25 minutes) the half
+  resolution      (not in the default set, about 20 minutes) the half
                   cylinder's equal quality against explicit yarns at 256 and
                   512 pixels (the example's own is 480), multi-scale and near
                   field, and multi-scale with table_min_cells 0.25: where

@@ -209,7 +209,7 @@ KnitDesc parse_knit_material(JsonObject& o, const std::string& dir, bool class_t
   mp.capm = o.boolean("capm", mp.capm);
   mp.footprint_points = static_cast<int>(o.integer("footprint_points", 1, KNIT_MS_MAX_POINTS, mp.footprint_points));
   mp.footprint_table = o.boolean("footprint_table", mp.footprint_table);
-  mp.table_min_cells = float(o.number("table_min_cells", Range::closed(0.25, 1), mp.table_min_cells));
+  mp.table_min_cells = float(o.number("table_min_cells", Range::closed(FootprintTable::kMinSubBox, 1), mp.table_min_cells));
   mp.table_bsdf = o.boolean("table_bsdf", mp.table_bsdf);
   mp.table_fold = o.boolean("table_fold", mp.table_fold);
   // (read either way, so that the key is still checked)
