@@ -602,40 +602,56 @@ float FootprintTable::p_delta(const KnitSurface& surface, const k::KFootprint& f
 
 namespace {
 
-// A box edge in sub-cell units, kept an exact double (x / cw in float
-// loses the sub-cell at the 1e4 units the kernel allows).
-struct SubRange {
-  double lo, hi;  // the box, in sub-cells
-  int64_t first, last;
-};
-
-SubRange sub_range(float centre, float extent, float cell, int sub) {
-  SubRange r;
-  const double c = double(centre) / double(cell), e = double(extent);
-  r.lo = (c - 0.5 * e) * sub;
-  r.hi = (c + 0.5 * e) * sub;
-  r.first = int64_t(std::floor(r.lo));
-  r.last = int64_t(std::ceil(r.hi)) - 1;
-  return r;
-}
-
 int64_t floor_div(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+// std::floor and std::ceil to int64 for |v| < 2^62, without libm's calls
+// (the build's baseline x86-64 has no rounding instruction): a quarter of
+// every sub-cell box's set-up.
+int64_t floor_i64(double v) {
+  const int64_t t = int64_t(v);  // towards zero
+  return double(t) > v ? t - 1 : t;
+}
+int64_t ceil_i64(double v) {
+  const int64_t t = int64_t(v);
+  return double(t) < v ? t + 1 : t;
+}
 
 }  // namespace
 
-bool FootprintTable::sub_box(float x, float y, float ex, float ey, const k::KnitGeom& g) {
+std::optional<FootprintTable::SubBox> FootprintTable::sub_box_at(float x, float y, float ex, float ey,
+                                                                 const k::KnitGeom& g) {
   // (1e9 pattern units: beyond the kernel's own float range, and the
   // sub-cell indices stay far inside int64)
   if (!(ex >= kMinSubBox && ey >= kMinSubBox) || !(ex <= float(kMaxSubBox) && ey <= float(kMaxSubBox)) ||
       !(std::fabs(x) <= 1e9f && std::fabs(y) <= 1e9f))
-    return false;
-  const SubRange rx = sub_range(x, ex, K_2PI, kSub), ry = sub_range(y, ey, g.row_spacing, kSub);
-  return (rx.last - rx.first + 1) * (ry.last - ry.first + 1) <= kMaxSubBox;
+    return std::nullopt;
+  // A box edge in sub-cell units, kept an exact double (x / cw in float
+  // loses the sub-cell at the 1e4 units the kernel allows).
+  const auto range = [](float centre, float extent, float cell) {
+    SubBox::Range r;
+    const double c = double(centre) / double(cell), e = double(extent);
+    r.lo = (c - 0.5 * e) * kSub;
+    r.hi = (c + 0.5 * e) * kSub;
+    r.first = floor_i64(r.lo);
+    r.last = ceil_i64(r.hi) - 1;
+    return r;
+  };
+  SubBox box;
+  box.rx = range(x, ex, K_2PI);
+  box.ry = range(y, ey, g.row_spacing);
+  box.x_ = x;
+  box.y_ = y;
+  if ((box.rx.last - box.rx.first + 1) * (box.ry.last - box.ry.first + 1) > kMaxSubBox) return std::nullopt;
+  return box;
+}
+
+bool FootprintTable::sub_box(float x, float y, float ex, float ey, const k::KnitGeom& g) {
+  return sub_box_at(x, y, ex, ey, g).has_value();
 }
 
 template <class Visit>
-void FootprintTable::for_each_sub(const k::KnitGeom& g, float x, float y, float ex, float ey, Visit&& visit) {
-  const SubRange rx = sub_range(x, ex, K_2PI, kSub), ry = sub_range(y, ey, g.row_spacing, kSub);
+void FootprintTable::for_each_sub(const k::KnitGeom& g, const SubBox& box, Visit&& visit) {
+  const SubBox::Range &rx = box.rx, &ry = box.ry;
   const int64_t kc0 = floor_div(rx.first, kSub);
   const int cm0 = k::k_modi(int(kc0), g.cols);  // (the box's columns stay far inside int: sub_box)
   for (int64_t j = ry.first; j <= ry.last; ++j) {
@@ -660,12 +676,33 @@ void FootprintTable::for_each_sub(const k::KnitGeom& g, float x, float y, float 
   }
 }
 
+void FootprintTable::check_sub_cells(const char* caller) const {
+  if (!has_sub_cells())
+    throw std::logic_error(std::string("FootprintTable::") + caller + ": the table has no sub-cells");
+}
+
+FootprintTable::SubBox FootprintTable::checked_sub_box(const k::KnitGeom& g, float x, float y, float ex, float ey,
+                                                       const char* caller) const {
+  check_sub_cells(caller);
+  const std::optional<SubBox> box = sub_box_at(x, y, ex, ey, g);
+  if (!box) throw std::invalid_argument(std::string("FootprintTable::") + caller + ": not a sub-cell box");
+  return *box;
+}
+
 k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, float x, float y, float ex, float ey,
                                                Vec3 wi, float pick, float* slot_hits) const {
+  return aggregate_sub(surface, checked_sub_box(surface.geom(), x, y, ex, ey, "aggregate_sub"), wi, pick,
+                       slot_hits);
+}
+
+k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, const SubBox& box, Vec3 wi, float pick,
+                                               float* slot_hits) const {
+  check_sub_cells("aggregate_sub");
   const k::KnitGeom& g = surface.geom();
+  const float x = box.x_, y = box.y_;
   // The overlap areas summed per class and sub-cell: one weighted sum of
   // moments per pair present, however many cells the box touches.
-  const SubAreas sa = sub_areas(g, x, y, ex, ey, "aggregate_sub");
+  const SubAreas sa = sub_areas(g, box);
   const std::array<double, kClasses * kSub * kSub>& area = sa.area;
   const double total = sa.total;
   k::KnitAggregate a{};
@@ -721,7 +758,7 @@ k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, float
   double visit_hits = 0;
   bool picked = false;
   const double target = double(k::knit_frac(pick)) * hits * total;
-  for_each_sub(g, x, y, ex, ey, [&](int kr, int kc, size_t cell, int sub, double w) {
+  for_each_sub(g, box, [&](int kr, int kc, size_t cell, int sub, double w) {
     const int slot = slot_[class_of_[cell]];
     const float h = hit_of[size_t(slot * kSubCells + sub)];
     if (!(h > 0)) return;
@@ -769,27 +806,89 @@ k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, float
 
 float FootprintTable::p_delta_sub(const KnitSurface& surface, float x, float y, float ex, float ey, Vec3 wi,
                                   float* slot_hits) const {
-  const SubAreas sa = sub_areas(surface.geom(), x, y, ex, ey, "p_delta_sub");
-  if (!(sa.total > 0)) return 1;
-  const DirWeights dw = dir_weights(wi);
-  double hits = 0;
-  for (int ps = 0; ps < slots_ * kSub * kSub; ++ps)
-    if (sa.area[size_t(ps)] > 0) {
-      const float share = float(sa.area[size_t(ps)] / sa.total), h = sub_hit_fraction(ps, dw);
-      hits += double(share) * double(h);
-      if (slot_hits) slot_hits[ps / (kSub * kSub)] += share * h;
-    }
-  return std::clamp(float(1 - hits), 0.0f, 1.0f);
+  return p_delta_sub(surface, checked_sub_box(surface.geom(), x, y, ex, ey, "p_delta_sub"), wi, slot_hits);
 }
 
-FootprintTable::SubAreas FootprintTable::sub_areas(const k::KnitGeom& g, float x, float y, float ex, float ey,
-                                                   const char* caller) const {
-  if (!has_sub_cells())
-    throw std::logic_error(std::string("FootprintTable::") + caller + ": the table has no sub-cells");
-  if (!sub_box(x, y, ex, ey, g))
-    throw std::invalid_argument(std::string("FootprintTable::") + caller + ": not a sub-cell box");
+float FootprintTable::p_delta_sub(const KnitSurface& surface, const SubBox& box, Vec3 wi, float* slot_hits) const {
+  check_sub_cells("p_delta_sub");
+  const k::KnitGeom& g = surface.geom();
+  // Each touched (class slot, sub-cell) pair's hit fraction in direction
+  // wi weighted by the box's overlap area on it.
+  const DirWeights dw = dir_weights(wi);
+  // sub_hit_fraction's four nodes, their offsets within a pair's block
+  const size_t stride = one_colour_ ? size_t(kSubStride1) : size_t(kMoments);
+  const size_t pair_block = size_t(kThetaBins) * kPhiBins * stride;
+  std::array<size_t, 4> at;
+  for (int q = 0; q < 4; ++q) at[size_t(q)] = size_t(dw.node[size_t(q)]) * stride + kHit;
+  const auto hit_of = [&](int pair) {  // as sub_hit_fraction
+    const uint16_t* p = &sub_moments_[size_t(pair) * pair_block];
+    float h = 0;
+    for (int q = 0; q < 4; ++q) h += dw.w[size_t(q)] * from_bf16(p[at[size_t(q)]]);
+    return double(std::clamp(h, 0.0f, 1.0f));
+  };
+  std::array<double, kClasses> by_slot{};
+  double hits = 0, total = 0;
+  if (period_rows_ == 1 || period_cols_ == 1) {
+    // Classes that change along one axis only (one class, ribs, welts): a
+    // sub-cell's area is its column's overlap times its row's, and its pair
+    // is its class and its place in the cell, so the box folds onto the
+    // places of one cell per class met along that axis (at most 16 pairs
+    // a class, however long the box).
+    const bool by_column = period_rows_ == 1;  // (else every column is alike)
+    const auto fold = [&](const SubBox::Range& r, bool classes, std::array<double, kClasses * kSub>& w,
+                          std::array<bool, kClasses>& met) {
+      double sum = 0;
+      for (int64_t i = r.first; i <= r.last; ++i) {
+        const double v = std::min(r.hi, double(i + 1)) - std::max(r.lo, double(i));
+        if (!(v > 0)) continue;
+        const int64_t cell = floor_div(i, kSub);
+        int slot = 0;
+        if (classes) {
+          // (class_of_ as knit_cell_index has it: along a row, or down a column)
+          const int m = k::k_modi(int(cell), by_column ? g.cols : g.rows);
+          slot = slot_[class_of_[by_column ? size_t(m) : size_t(g.rows - 1 - m) * size_t(g.cols)]];
+        }
+        met[size_t(slot)] = true;
+        w[size_t(slot * kSub + int(i - cell * kSub))] += v;
+        sum += v;
+      }
+      return sum;
+    };
+    std::array<double, kClasses * kSub> wc{}, wo{};  // along the classes' axis, along the other
+    std::array<bool, kClasses> met{}, unused{};
+    total = fold(by_column ? box.rx : box.ry, true, wc, met) * fold(by_column ? box.ry : box.rx, false, wo, unused);
+    for (int slot = 0; slot < slots_; ++slot) {
+      if (!met[size_t(slot)]) continue;
+      double sh = 0;
+      for (int a = 0; a < kSub; ++a) {
+        if (!(wc[size_t(slot * kSub + a)] > 0)) continue;
+        double line = 0;
+        for (int o = 0; o < kSub; ++o)
+          if (wo[size_t(o)] > 0)
+            line += wo[size_t(o)] * hit_of(slot * kSub * kSub + (by_column ? o * kSub + a : a * kSub + o));
+        sh += wc[size_t(slot * kSub + a)] * line;
+      }
+      by_slot[size_t(slot)] = sh;
+      hits += sh;
+    }
+  } else {
+    for_each_sub(g, box, [&](int, int, size_t cell, int sub, double w) {
+      const int slot = slot_[class_of_[cell]];
+      const double wh = w * hit_of(slot * kSub * kSub + sub);
+      total += w;
+      hits += wh;
+      by_slot[size_t(slot)] += wh;
+    });
+  }
+  if (!(total > 0)) return 1;
+  if (slot_hits)
+    for (int s = 0; s < slots_; ++s) slot_hits[s] += float(by_slot[size_t(s)] / total);
+  return std::clamp(float(1 - hits / total), 0.0f, 1.0f);
+}
+
+FootprintTable::SubAreas FootprintTable::sub_areas(const k::KnitGeom& g, const SubBox& box) const {
   SubAreas sa;
-  for_each_sub(g, x, y, ex, ey, [&](int, int, size_t cell, int sub, double w) {
+  for_each_sub(g, box, [&](int, int, size_t cell, int sub, double w) {
     sa.area[size_t(slot_[class_of_[cell]] * kSub * kSub + sub)] += w;
     sa.total += w;
     ++sa.touched;

@@ -313,25 +313,30 @@ void KnitMaterial::set_colors(KnitShade& sh, int color_index) const {
   sh.kd_t = params_.bsdf.transmit_colors[size_t(c)];
 }
 
-KnitMaterial::Route KnitMaterial::route(const BaseHit& hit, Vec3& fx, Vec3& fy, Vec3& e) const {
+KnitMaterial::Route KnitMaterial::route(const BaseHit& hit, Vec3& fx, Vec3& fy, Vec3& e,
+                                        std::optional<FootprintTable::SubBox>* sub) const {
   if (params_.mode != KnitMode::MultiScale) return Route::NearField;
   footprint_axes(hit, fx, fy);
   e = k::knit_footprint_extent(surface_.geom(), fx, fy);
   // A cell or more in both directions (knit_footprint_stratified's test).
   if (e.x >= 1.0f && e.y >= 1.0f) return table_ ? Route::Cells : Route::Marched;
-  if (sub_cells_serve(params_.uv_scale * hit.u, params_.uv_scale * hit.v, e)) return Route::SubCells;
+  if (std::optional<FootprintTable::SubBox> box = sub_cells_serve(params_.uv_scale * hit.u, params_.uv_scale * hit.v, e)) {
+    if (sub) *sub = box;
+    return Route::SubCells;
+  }
   return params_.near_field_below_cell ? Route::NearField : Route::Marched;
 }
 
-bool KnitMaterial::sub_cells_serve(float x, float y, Vec3 e) const {
-  return table_ && table_->has_sub_cells() && e.x >= params_.table_min_cells && e.y >= params_.table_min_cells &&
-         FootprintTable::sub_box(x, y, e.x, e.y, surface_.geom());
+std::optional<FootprintTable::SubBox> KnitMaterial::sub_cells_serve(float x, float y, Vec3 e) const {
+  if (!(table_ && table_->has_sub_cells() && e.x >= params_.table_min_cells && e.y >= params_.table_min_cells))
+    return std::nullopt;
+  return FootprintTable::sub_box_at(x, y, e.x, e.y, surface_.geom());
 }
 
 bool KnitMaterial::table_serves(float x, float y, Vec3 fx, Vec3 fy) const {
   if (!table_) return false;
   const Vec3 e = k::knit_footprint_extent(surface_.geom(), fx, fy);
-  return (e.x >= 1.0f && e.y >= 1.0f) || sub_cells_serve(x, y, e);
+  return (e.x >= 1.0f && e.y >= 1.0f) || sub_cells_serve(x, y, e).has_value();
 }
 
 bool KnitMaterial::near_field_at(const BaseHit& hit) const {
@@ -365,7 +370,8 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
   const float top = surface_.shell_top();
 
   Vec3 fx, fy, e;
-  const Route rt = route(hit, fx, fy, e);
+  std::optional<FootprintTable::SubBox> box;
+  const Route rt = route(hit, fx, fy, e, &box);
   sh.quarter_cell = rt == Route::NearField && params_.mode == KnitMode::MultiScale && table_ &&
                     FootprintTable::sub_box(x, y, e.x, e.y, surface_.geom());  // (e is set in multi-scale only)
   if (table_bsdf_ && (rt == Route::Cells || rt == Route::SubCells) && table_->one_colour()) {
@@ -375,7 +381,7 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     std::array<float, FootprintTable::kClasses> slot_hits{};
     float p;
     if (rt == Route::SubCells) {
-      p = table_->p_delta_sub(surface_, x, y, e.x, e.y, wi, slot_hits.data());
+      p = table_->p_delta_sub(surface_, *box, wi, slot_hits.data());
       sh.from_sub_cells = true;
     } else {
       const k::KFootprint f =
@@ -404,7 +410,7 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
     std::array<float, FootprintTable::kClasses> slot_hits{};  // the tabulated BSDF's mix
     float* const mix_out = table_bsdf_ ? slot_hits.data() : nullptr;
     if (rt == Route::SubCells) {
-      a = table_->aggregate_sub(surface_, x, y, e.x, e.y, wi, shift[0], mix_out);  // flat-base, as below
+      a = table_->aggregate_sub(surface_, *box, wi, shift[0], mix_out);  // flat-base, as below
       sh.from_table = true;
       sh.from_sub_cells = true;
     } else if (rt == Route::Cells) {
@@ -569,12 +575,13 @@ float KnitMaterial::transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameP
   // Only whether the ray meets yarn (or how often, over a footprint): no
   // shading frame, layer count or ply profile.
   Vec3 fx, fy, e;
-  const Route rt = route(hit, fx, fy, e);
+  std::optional<FootprintTable::SubBox> box;
+  const Route rt = route(hit, fx, fy, e, &box);
   if (rt != Route::NearField) {
     const float S = hit.pattern_per_world, us = params_.uv_scale;
     const float x = us * hit.u, y = us * hit.v;
     const Vec3 wi = k::kv3_neg(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n));
-    if (rt == Route::SubCells) return table_->p_delta_sub(surface_, x, y, e.x, e.y, wi);
+    if (rt == Route::SubCells) return table_->p_delta_sub(surface_, *box, wi);
     const k::KFootprint f =
         k::knit_footprint(surface_.geom(), x, y, fx, fy, footprint_points_for(fx, fy), shift[0], shift[1]);
     if (rt == Route::Cells) return table_->p_delta(surface_, f, wi);

@@ -664,7 +664,9 @@ SubCellErrors sub_cells_against_tubes(double lo, double hi, double box_normal_bo
         const float cx = float(x0 + 0.5 * bw), cy = float(y0 + 0.5 * bh);
         EXPECT_TRUE(FootprintTable::sub_box(cx, cy, float(ex), float(ey), sc.surface.geom()));
         const k::KnitAggregate a = table.aggregate_sub(sc.surface, cx, cy, float(ex), float(ey), wif);
-        EXPECT_FLOAT_EQ(table.p_delta_sub(sc.surface, cx, cy, float(ex), float(ey), wif), a.p_delta);
+        // (the same sum in another order: p_delta_sub folds the box's areas
+        // where it can, SubCellHitFractionsSumTheBoxOverlaps)
+        EXPECT_NEAR(table.p_delta_sub(sc.surface, cx, cy, float(ex), float(ey), wif), a.p_delta, 1e-6);
         // The whole cell under the box's centre, from the whole-cell table.
         const k::KFootprint fc = k::knit_footprint(sc.surface.geom(), cx, cy, k::kv3(float(cw), 0, 0),
                                                    k::kv3(0, float(ch), 0), 4, 0.5f, 0.5f);
@@ -742,6 +744,93 @@ TEST(FootprintTable, QuarterCellBoxesMatchExplicitTubes) {
 // statistic of a node is the mean of its sixteen sub-cells' (to their
 // bfloat16 rounding); and they must differ from it, or they would resolve
 // nothing.
+// p_delta_sub and its per-class hits against their definition, summed in
+// double precision sub-cell by sub-cell: each sub-cell the box overlaps,
+// weighted by the overlap's area, with the bilinear hit fraction of its
+// class and place in the cell (the stored, bfloat16-rounded statistics).
+// The table folds boxes over one cell when the classes change along one
+// axis only: ribs (by column), garter (by row), one class; seed takes the
+// visit of every sub-cell. Boxes up to the 64 sub-cells sub_box allows,
+// anywhere (negative coordinates, far from the origin), views from both
+// sides.
+TEST(FootprintTable, SubCellHitFractionsSumTheBoxOverlaps) {
+  struct Case {
+    const char* name;
+    int axis;  // 0: the classes change along x only, 1: along y only, 2: both
+  };
+  for (const Case& cs : {Case{"rib_2x2", 0}, Case{"stockinette", 0}, Case{"garter", 1}, Case{"seed", 2}}) {
+    KnitSurface s(example(cs.name), StitchParams{});
+    const FootprintTable table(s, CapmOptions{});
+    if (cs.axis == 0) EXPECT_EQ(table.period_rows(), 1) << cs.name;
+    if (cs.axis == 1) EXPECT_EQ(table.period_cols(), 1) << cs.name;
+    if (cs.axis == 2) EXPECT_TRUE(table.period_rows() > 1 && table.period_cols() > 1) << cs.name;
+    const std::vector<float> sm = table.sub_moments();
+    const int nodes = FootprintTable::kThetaBins * FootprintTable::kPhiBins;
+    const int sub = FootprintTable::kSub, pairs = table.classes_present() * sub * sub;
+    const size_t stride = sm.size() / (size_t(pairs) * size_t(nodes));  // floats a node; the hit fraction first
+    ASSERT_GT(stride, 0u);
+    // (the cell's width as the kernel has it, 2 pi in float: a column is
+    // [c K_2PI, (c + 1) K_2PI), which far from the origin differs from the
+    // double's by a good part of 1e-4 sub-cells)
+    const double cw = double(K_2PI), ch = s.geom().row_spacing;
+    std::mt19937 rng(77);
+    std::uniform_real_distribution<double> U(0, 1);
+    int boxes = 0, long_boxes = 0;
+    double worst = 0;
+    for (int b = 0; b < 400; ++b) {
+      const double ex = 0.25 + (b % 3 == 0 ? 2.5 : 0.75) * U(rng), ey = 0.25 + (b % 3 == 1 ? 2.5 : 0.75) * U(rng);
+      const double far = b % 4 == 0 ? 2000 : 20;
+      const float x = float(far * (2 * U(rng) - 1)), y = float(far * (2 * U(rng) - 1));
+      if (!FootprintTable::sub_box(x, y, float(ex), float(ey), s.geom())) continue;
+      const double th = 3.0 * U(rng), ph = 2 * kPiD * U(rng);
+      const k::kvec3 wi = k::kv3(float(std::sin(th) * std::cos(ph)), float(std::sin(th) * std::sin(ph)),
+                                 float(std::cos(th)));
+      const SphereNodes dn = sphere_nodes(wi, FootprintTable::kThetaBins, FootprintTable::kPhiBins);
+      // The definition, in double.
+      const double fex = double(float(ex)), fey = double(float(ey));  // as p_delta_sub takes them
+      const double xlo = (double(x) / cw - 0.5 * fex) * sub, xhi = (double(x) / cw + 0.5 * fex) * sub;
+      const double ylo = (double(y) / ch - 0.5 * fey) * sub, yhi = (double(y) / ch + 0.5 * fey) * sub;
+      double area = 0, hits = 0;
+      std::array<double, FootprintTable::kClasses> by_slot{};
+      int touched = 0;
+      for (int64_t j = int64_t(std::floor(ylo)); j < int64_t(std::ceil(yhi)); ++j)
+        for (int64_t i = int64_t(std::floor(xlo)); i < int64_t(std::ceil(xhi)); ++i) {
+          const double w = (std::min(xhi, double(i + 1)) - std::max(xlo, double(i))) *
+                           (std::min(yhi, double(j + 1)) - std::max(ylo, double(j)));
+          if (!(w > 0)) continue;
+          ++touched;
+          const int64_t kr = int64_t(std::floor(double(j) / sub)), kc = int64_t(std::floor(double(i) / sub));
+          const int slot = table.slot_of(FootprintTable::cell_class(s, int(kr), int(kc)));
+          ASSERT_GE(slot, 0);
+          const int pair = slot * sub * sub + int(j - kr * sub) * sub + int(i - kc * sub);
+          double h = 0;
+          for (int q = 0; q < 4; ++q)
+            h += double(dn.w[size_t(q)]) * sm[(size_t(pair) * size_t(nodes) + size_t(dn.node[size_t(q)])) * stride];
+          h = std::clamp(h, 0.0, 1.0);
+          area += w;
+          hits += w * h;
+          by_slot[size_t(slot)] += w * h;
+        }
+      ASSERT_GT(area, 0);
+      const double ref = std::clamp(1 - hits / area, 0.0, 1.0);
+      std::array<float, FootprintTable::kClasses> got_slots{};
+      const float got = table.p_delta_sub(s, x, y, float(ex), float(ey), wi, got_slots.data());
+      EXPECT_NEAR(got, ref, 2e-6) << cs.name << " box " << b << " at " << x << ", " << y << ": " << ex << " x " << ey;
+      for (int sl = 0; sl < table.classes_present(); ++sl)
+        EXPECT_NEAR(got_slots[size_t(sl)], by_slot[size_t(sl)] / area, 2e-6)
+            << cs.name << " box " << b << " slot " << sl;
+      worst = std::max(worst, std::abs(double(got) - ref));
+      ++boxes;
+      if (touched > 2 * sub * sub) ++long_boxes;
+    }
+    std::printf("[ sub-cells ] %-12s p_delta_sub against the sub-cell sum in double: worst %.2e over %d boxes "
+                "(%d of more than 32 sub-cells)\n",
+                cs.name, worst, boxes, long_boxes);
+    EXPECT_GT(boxes, 200) << cs.name;
+    EXPECT_GT(long_boxes, 20) << cs.name << ": too few long boxes to test the fold";
+  }
+}
+
 TEST(FootprintTable, WholeCellsAreTheMeanOfTheirSubCells) {
   KnitSurface s(seed(), StitchParams{});
   const FootprintTable t(s, CapmOptions{}, 64);

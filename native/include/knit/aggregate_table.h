@@ -34,6 +34,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -127,13 +128,37 @@ class FootprintTable {
   static constexpr int kMaxSubBox = 64;
   static constexpr float kMinSubBox = 0.25f;  // cells: one sub-cell on a side
   static bool sub_box(float x, float y, float ex, float ey, const k::KnitGeom& g);
+  // A box sub_box accepted, in sub-cell units: only sub_box_at makes one,
+  // so the overloads taking it need not check it again (the routing of a
+  // hit checks once, shades and attenuates with it).
+  class SubBox {
+   public:
+    float x() const { return x_; }
+    float y() const { return y_; }
+
+   private:
+    friend class FootprintTable;
+    struct Range {
+      double lo, hi;  // the box, in sub-cells (exact doubles: x / cw in float loses the sub-cell at 1e4 units)
+      int64_t first, last;  // the sub-cells it touches
+    };
+    Range rx{}, ry{};
+    float x_ = 0, y_ = 0;
+  };
+  // The box of ex x ey cells at (x, y), when sub_box accepts it.
+  static std::optional<SubBox> sub_box_at(float x, float y, float ex, float ey, const k::KnitGeom& g);
   // slot_hits (kClasses floats, zeroed by the caller, when given): per
   // class slot, the box's area share of that class times its sub-cells'
-  // hit fractions, summed.
+  // hit fractions, summed. The overloads taking coordinates throw for a
+  // box sub_box refuses and for a table without sub-cells; those taking a
+  // SubBox only for the latter.
   k::KnitAggregate aggregate_sub(const KnitSurface& surface, float x, float y, float ex, float ey, Vec3 wi_local,
                                  float pick = 0.5f, float* slot_hits = nullptr) const;
+  k::KnitAggregate aggregate_sub(const KnitSurface& surface, const SubBox& box, Vec3 wi_local, float pick = 0.5f,
+                                 float* slot_hits = nullptr) const;
   float p_delta_sub(const KnitSurface& surface, float x, float y, float ex, float ey, Vec3 wi_local,
                     float* slot_hits = nullptr) const;
+  float p_delta_sub(const KnitSurface& surface, const SubBox& box, Vec3 wi_local, float* slot_hits = nullptr) const;
   // The per-sub-cell statistics (kMoments floats per class present,
   // sub-cell and direction node, as stored: rounded to bfloat16; the
   // neighbour shares zero for a pattern of one colour index), for tests.
@@ -233,14 +258,17 @@ class FootprintTable {
     return f;
   }
   // The overlap areas of a box (see aggregate_sub) summed per (class slot,
-  // sub-cell) pair, their total and the sub-cells touched; throws for a
-  // table without sub-cells or a box outside their domain, naming `caller`.
+  // sub-cell) pair, their total and the sub-cells touched.
   struct SubAreas {
     std::array<double, kClasses * kSub * kSub> area{};
     double total = 0;
     int touched = 0;
   };
-  SubAreas sub_areas(const k::KnitGeom& g, float x, float y, float ex, float ey, const char* caller) const;
+  SubAreas sub_areas(const k::KnitGeom& g, const SubBox& box) const;
+  // The box at (x, y) for the overloads taking coordinates: throws for a
+  // table without sub-cells or a box outside their domain, naming `caller`.
+  SubBox checked_sub_box(const k::KnitGeom& g, float x, float y, float ex, float ey, const char* caller) const;
+  void check_sub_cells(const char* caller) const;
   // The hit fraction of pair `pair` in direction d (bilinear, clamped), as
   // aggregate_sub sums it.
   float sub_hit_fraction(int pair, const DirWeights& d) const;
@@ -248,7 +276,7 @@ class FootprintTable {
   // visit(row k, column c, the cell's index in class_of_ (knit_cell_index),
   // sub-cell index, area) for each.
   template <class Visit>
-  static void for_each_sub(const k::KnitGeom& g, float x, float y, float ex, float ey, Visit&& visit);
+  static void for_each_sub(const k::KnitGeom& g, const SubBox& box, Visit&& visit);
   // Fills a from `points`, the box's p_delta, its summed moments `sum`
   // (kLinear floats) and tangent sum `tsum`: the hit count, and the
   // hit-weighted means (normal, tangent, height at (x, y), slope covariance,

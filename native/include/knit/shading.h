@@ -15,6 +15,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "knit/aggregate_table.h"
@@ -224,10 +225,13 @@ class KnitMaterial {
   // marched aggregate. Sets the footprint's axes and extent (cells) for
   // the multi-scale routes.
   enum class Route { NearField, Cells, SubCells, Marched };
-  Route route(const BaseHit& hit, Vec3& fx, Vec3& fy, Vec3& extent) const;
-  // Whether the class table's sub-cells serve a footprint of `extent`
-  // cells (below a cell in some direction) at pattern point (x, y).
-  bool sub_cells_serve(float x, float y, Vec3 extent) const;
+  // For Route::SubCells, `sub` (when given) gets the footprint's box.
+  Route route(const BaseHit& hit, Vec3& fx, Vec3& fy, Vec3& extent,
+              std::optional<FootprintTable::SubBox>* sub = nullptr) const;
+  // The box of the footprint of `extent` cells (below a cell in some
+  // direction) at pattern point (x, y), when the class table's sub-cells
+  // serve it.
+  std::optional<FootprintTable::SubBox> sub_cells_serve(float x, float y, Vec3 extent) const;
   // Shades sh with the tabulated BSDF: the mix of the classes' hits
   // `slot_hits` seen from wi (colours already in sh; colour_w, the
   // footprint's shares of the palette's colours for a folded table, null
