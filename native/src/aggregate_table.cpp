@@ -835,8 +835,7 @@ float FootprintTable::p_delta_sub(const KnitSurface& surface, const SubBox& box,
     // places of one cell per class met along that axis (at most 16 pairs
     // a class, however long the box).
     const bool by_column = period_rows_ == 1;  // (else every column is alike)
-    const auto fold = [&](const SubBox::Range& r, bool classes, std::array<double, kClasses * kSub>& w,
-                          std::array<bool, kClasses>& met) {
+    const auto fold = [&](const SubBox::Range& r, bool classes, double* w, bool* met) {
       double sum = 0;
       for (int64_t i = r.first; i <= r.last; ++i) {
         const double v = std::min(r.hi, double(i + 1)) - std::max(r.lo, double(i));
@@ -848,25 +847,28 @@ float FootprintTable::p_delta_sub(const KnitSurface& surface, const SubBox& box,
           const int m = k::k_modi(int(cell), by_column ? g.cols : g.rows);
           slot = slot_[class_of_[by_column ? size_t(m) : size_t(g.rows - 1 - m) * size_t(g.cols)]];
         }
-        met[size_t(slot)] = true;
-        w[size_t(slot * kSub + int(i - cell * kSub))] += v;
+        met[slot] = true;
+        w[slot * kSub + int(i - cell * kSub)] += v;
         sum += v;
       }
       return sum;
     };
-    std::array<double, kClasses * kSub> wc{}, wo{};  // along the classes' axis, along the other
-    std::array<bool, kClasses> met{}, unused{};
-    total = fold(by_column ? box.rx : box.ry, true, wc, met) * fold(by_column ? box.ry : box.rx, false, wo, unused);
+    // (only the slots present cleared: a memset of the whole arrays cost
+    // more than the fold)
+    double wc[kClasses * kSub], wo[kSub] = {0, 0, 0, 0};  // along the classes' axis, along the other
+    bool met[kClasses], unused = false;
+    std::fill_n(wc, slots_ * kSub, 0.0);
+    std::fill_n(met, slots_, false);
+    total = fold(by_column ? box.rx : box.ry, true, wc, met) * fold(by_column ? box.ry : box.rx, false, wo, &unused);
     for (int slot = 0; slot < slots_; ++slot) {
-      if (!met[size_t(slot)]) continue;
+      if (!met[slot]) continue;
       double sh = 0;
       for (int a = 0; a < kSub; ++a) {
-        if (!(wc[size_t(slot * kSub + a)] > 0)) continue;
+        if (!(wc[slot * kSub + a] > 0)) continue;
         double line = 0;
         for (int o = 0; o < kSub; ++o)
-          if (wo[size_t(o)] > 0)
-            line += wo[size_t(o)] * hit_of(slot * kSub * kSub + (by_column ? o * kSub + a : a * kSub + o));
-        sh += wc[size_t(slot * kSub + a)] * line;
+          if (wo[o] > 0) line += wo[o] * hit_of(slot * kSub * kSub + (by_column ? o * kSub + a : a * kSub + o));
+        sh += wc[slot * kSub + a] * line;
       }
       by_slot[size_t(slot)] = sh;
       hits += sh;
