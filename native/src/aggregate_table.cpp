@@ -710,7 +710,8 @@ k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, const
   constexpr int kSubCells = kSub * kSub;
   std::array<float, kLinear> sum{};
   Vec3 tsum = k::kv3(0, 0, 0);
-  std::array<float, kClasses * kSubCells> hit_of{};  // hit fraction per pair, for the colours
+  std::array<float, kClasses * kSubCells> hit_of;  // hit fraction per pair, for the colours
+  std::fill_n(hit_of.begin(), slots_ * kSubCells, 0.0f);  // (the slots present)
   double hits = 0;
   // Each (class, sub-cell) pair's four direction nodes, weighted by its
   // share of the box times their bilinear weights; kStride values a node,
@@ -890,6 +891,7 @@ float FootprintTable::p_delta_sub(const KnitSurface& surface, const SubBox& box,
 
 FootprintTable::SubAreas FootprintTable::sub_areas(const k::KnitGeom& g, const SubBox& box) const {
   SubAreas sa;
+  std::fill_n(sa.area.begin(), slots_ * kSub * kSub, 0.0);
   for_each_sub(g, box, [&](int, int, size_t cell, int sub, double w) {
     sa.area[size_t(slot_[class_of_[cell]] * kSub * kSub + sub)] += w;
     sa.total += w;

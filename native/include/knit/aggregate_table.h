@@ -258,9 +258,10 @@ class FootprintTable {
     return f;
   }
   // The overlap areas of a box (see aggregate_sub) summed per (class slot,
-  // sub-cell) pair, their total and the sub-cells touched.
+  // sub-cell) pair, their total and the sub-cells touched (the areas of
+  // the slots present only: the rest is left uncleared).
   struct SubAreas {
-    std::array<double, kClasses * kSub * kSub> area{};
+    std::array<double, kClasses * kSub * kSub> area;
     double total = 0;
     int touched = 0;
   };
