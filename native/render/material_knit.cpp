@@ -149,8 +149,9 @@ const knit::KnitMaterial& KnitModelMaterial::model_for(const knit::BaseHit& h) c
 // The footprint's sample shift: drawn when the model reads it, else the
 // draw is skipped (a multi-scale footprint read whole from the class table,
 // the near field), so that the sampler's later draws stay the same.
-static Vec2 footprint_shift(const knit::KnitMaterial& model, const knit::BaseHit& hit, Sampler& sampler) {
-  if (model.uses_shift(hit)) return sampler.get2d();
+static Vec2 footprint_shift(const knit::KnitMaterial& model, const knit::KnitMaterial::HitRoute& route,
+                            Sampler& sampler) {
+  if (model.uses_shift(route)) return sampler.get2d();
   sampler.skip();
   return {0.5f, 0.5f};
 }
@@ -159,11 +160,12 @@ PassThrough KnitModelMaterial::resolve(SurfaceInteraction& si, const RayDifferen
   PassThrough pt;
   knit::BaseHit hit = base_hit(si, ray.diff_scale);
   const knit::KnitMaterial& model = cone_footprint(si, ray.d, hit) ? *model_ : model_for(hit);
-  const Vec2 shift = footprint_shift(model, hit, sampler);
+  const knit::KnitMaterial::HitRoute route = model.route_of(hit);  // (once for the shift and the shading)
+  const Vec2 shift = footprint_shift(model, route, sampler);
   // With the tabulated BSDF, one number serves the pass through the gaps
   // and, past it, the pick of the mix's view nodes (KnitMaterial::shade).
   const float u = model.table_bsdf() ? sampler.get1d() : -1.0f;
-  const knit::KnitShade sh = model.shade(hit, to_kvec(ray.d), frame_.get(), {shift.x, shift.y}, u);
+  const knit::KnitShade sh = model.shade(hit, route, to_kvec(ray.d), frame_.get(), {shift.x, shift.y}, u);
   pt.from_table = sh.from_table;
   pt.from_sub_cells = sh.from_sub_cells;
   pt.quarter_cell = sh.quarter_cell;
@@ -269,8 +271,9 @@ bool KnitModelMaterial::bounce_inside(SurfaceInteraction& si, Vec3 wi) const {
 Rgb KnitModelMaterial::transmittance(const SurfaceInteraction& si, Vec3 w, Sampler& sampler) const {
   knit::BaseHit hit = base_hit(si);
   const knit::KnitMaterial& model = cone_footprint(si, w, hit) ? *model_ : model_for(hit);
-  const Vec2 shift = footprint_shift(model, hit, sampler);
-  return Rgb(model.transmittance(hit, to_kvec(w), frame_.get(), {shift.x, shift.y}));
+  const knit::KnitMaterial::HitRoute route = model.route_of(hit);
+  const Vec2 shift = footprint_shift(model, route, sampler);
+  return Rgb(model.transmittance(hit, route, to_kvec(w), frame_.get(), {shift.x, shift.y}));
 }
 
 }  // namespace knit::render

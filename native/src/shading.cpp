@@ -344,9 +344,16 @@ bool KnitMaterial::near_field_at(const BaseHit& hit) const {
   return route(hit, fx, fy, e) == Route::NearField;
 }
 
-bool KnitMaterial::uses_shift(const BaseHit& hit) const {
-  Vec3 fx, fy, e;
-  switch (route(hit, fx, fy, e)) {
+KnitMaterial::HitRoute KnitMaterial::route_of(const BaseHit& hit) const {
+  HitRoute r;
+  r.route = int(route(hit, r.fx, r.fy, r.e, &r.box));
+  return r;
+}
+
+bool KnitMaterial::uses_shift(const BaseHit& hit) const { return uses_shift(route_of(hit)); }
+
+bool KnitMaterial::uses_shift(const HitRoute& r) const {
+  switch (Route(r.route)) {
     case Route::NearField:
       return false;  // one ray, no footprint points
     case Route::SubCells:
@@ -361,6 +368,11 @@ bool KnitMaterial::uses_shift(const BaseHit& hit) const {
 
 KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
                               std::array<float, 2> shift, float u) const {
+  return shade(hit, route_of(hit), ray_dir, frame, shift, u);
+}
+
+KnitShade KnitMaterial::shade(const BaseHit& hit, const HitRoute& r, Vec3 ray_dir, const FrameProvider* frame,
+                              std::array<float, 2> shift, float u) const {
   KnitShade sh = unshaded();
   const YarnBsdfParams& bp = params_.bsdf;
   const float S = hit.pattern_per_world;
@@ -369,9 +381,9 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvi
   sh.from_back = wi.z < 0;
   const float top = surface_.shell_top();
 
-  Vec3 fx, fy, e;
-  std::optional<FootprintTable::SubBox> box;
-  const Route rt = route(hit, fx, fy, e, &box);
+  const Vec3 &fx = r.fx, &fy = r.fy, &e = r.e;
+  const std::optional<FootprintTable::SubBox>& box = r.box;
+  const Route rt = Route(r.route);
   sh.quarter_cell = rt == Route::NearField && params_.mode == KnitMode::MultiScale && table_ &&
                     FootprintTable::sub_box(x, y, e.x, e.y, surface_.geom());  // (e is set in multi-scale only)
   if (table_bsdf_ && (rt == Route::Cells || rt == Route::SubCells) && table_->one_colour()) {
@@ -572,11 +584,16 @@ void KnitMaterial::shade_yarn(const BaseHit& hit, const k::KnitLineHit& h, const
 
 float KnitMaterial::transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
                                   std::array<float, 2> shift) const {
+  return transmittance(hit, route_of(hit), ray_dir, frame, shift);
+}
+
+float KnitMaterial::transmittance(const BaseHit& hit, const HitRoute& r, Vec3 ray_dir, const FrameProvider* frame,
+                                  std::array<float, 2> shift) const {
   // Only whether the ray meets yarn (or how often, over a footprint): no
   // shading frame, layer count or ply profile.
-  Vec3 fx, fy, e;
-  std::optional<FootprintTable::SubBox> box;
-  const Route rt = route(hit, fx, fy, e, &box);
+  const Vec3 &fx = r.fx, &fy = r.fy, &e = r.e;
+  const std::optional<FootprintTable::SubBox>& box = r.box;
+  const Route rt = Route(r.route);
   if (rt != Route::NearField) {
     const float S = hit.pattern_per_world, us = params_.uv_scale;
     const float x = us * hit.u, y = us * hit.v;
@@ -590,7 +607,7 @@ float KnitMaterial::transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameP
     return k::knit_footprint_p_delta(surface_.geom(), surface_.codes(), surface_.colors(), f, wi, kap.x, kap.y,
                                      params_.capm_options.max_segment, params_.capm_options.max_steps);
   }
-  if (!params_.capm) return shade(hit, ray_dir, frame, shift).pass_through ? 1.0f : 0.0f;
+  if (!params_.capm) return shade(hit, r, ray_dir, frame, shift).pass_through ? 1.0f : 0.0f;
   // Hit or miss only (a corrected hit stays a hit: knit_capm_correct keeps
   // the first one when the corrected segment misses).
   return march(hit, ray_dir, frame, true).state == KNIT_CAPM_HIT ? 0.0f : 1.0f;

@@ -129,11 +129,28 @@ class KnitMaterial {
   KnitShade shade(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
                   std::array<float, 2> shift = {0.5f, 0.5f}, float u = -1) const;
 
+  // How shade() and transmittance() treat a hit (near field, the class
+  // table's whole cells or sub-cells, the marched aggregate) and the
+  // footprint they read, found from the hit alone. A renderer that asks
+  // uses_shift() before shading finds it once (route_of) and passes it to
+  // the overloads below, which must get the same hit.
+  class HitRoute {
+   private:
+    friend class KnitMaterial;
+    int route = 0;  // (a KnitMaterial::Route)
+    Vec3 fx{}, fy{}, e{};
+    std::optional<FootprintTable::SubBox> box;
+  };
+  HitRoute route_of(const BaseHit& hit) const;
+  KnitShade shade(const BaseHit& hit, const HitRoute& route, Vec3 ray_dir, const FrameProvider* frame,
+                  std::array<float, 2> shift = {0.5f, 0.5f}, float u = -1) const;
+
   // Whether shade() and transmittance() at this hit read their `shift`:
   // only multi-scale footprints that are marched, or read from the class
   // table for their colours or points. A renderer may skip drawing it
   // otherwise (the results are the same for any shift).
   bool uses_shift(const BaseHit& hit) const;
+  bool uses_shift(const HitRoute& route) const;
   // Whether shade() and transmittance() treat this hit as near field: the
   // near-field mode, or a multi-scale footprint below a stitch cell (and
   // outside the class table's sub-cells) with near_field_below_cell.
@@ -142,6 +159,8 @@ class KnitMaterial {
   // Fraction of light a shadow ray along ray_dir passes through the fabric
   // here: near-field 0 or 1 (a gap or a yarn), multi-scale p_delta.
   float transmittance(const BaseHit& hit, Vec3 ray_dir, const FrameProvider* frame,
+                      std::array<float, 2> shift = {0.5f, 0.5f}) const;
+  float transmittance(const BaseHit& hit, const HitRoute& route, Vec3 ray_dir, const FrameProvider* frame,
                       std::array<float, 2> shift = {0.5f, 0.5f}) const;
 
   // Self-shadowing (near field, `from` a shade() or shade_from() result with
