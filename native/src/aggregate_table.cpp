@@ -814,14 +814,15 @@ float FootprintTable::p_delta_sub(const KnitSurface& surface, const SubBox& box,
   check_sub_cells("p_delta_sub");
   const k::KnitGeom& g = surface.geom();
   // Each touched (class slot, sub-cell) pair's hit fraction in direction
-  // wi weighted by the box's overlap area on it.
+  // wi (bilinear over the four nodes around it, clamped, as aggregate_sub
+  // takes it) weighted by the box's overlap area on the pair.
   const DirWeights dw = dir_weights(wi);
-  // sub_hit_fraction's four nodes, their offsets within a pair's block
+  // the four nodes' offsets within a pair's block
   const size_t stride = one_colour_ ? size_t(kSubStride1) : size_t(kMoments);
   const size_t pair_block = size_t(kThetaBins) * kPhiBins * stride;
   std::array<size_t, 4> at;
   for (int q = 0; q < 4; ++q) at[size_t(q)] = size_t(dw.node[size_t(q)]) * stride + kHit;
-  const auto hit_of = [&](int pair) {  // as sub_hit_fraction
+  const auto hit_of = [&](int pair) {
     const uint16_t* p = &sub_moments_[size_t(pair) * pair_block];
     float h = 0;
     for (int q = 0; q < 4; ++q) h += dw.w[size_t(q)] * from_bf16(p[at[size_t(q)]]);
@@ -898,12 +899,6 @@ FootprintTable::SubAreas FootprintTable::sub_areas(const k::KnitGeom& g, const S
     ++sa.touched;
   });
   return sa;
-}
-
-float FootprintTable::sub_hit_fraction(int pair, const DirWeights& d) const {
-  float h = 0;
-  for (int q = 0; q < 4; ++q) h += d.w[size_t(q)] * from_bf16(sub_node_at(pair, d.node[size_t(q)])[kHit]);
-  return std::clamp(h, 0.0f, 1.0f);
 }
 
 }  // namespace knit

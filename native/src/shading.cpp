@@ -591,7 +591,7 @@ float KnitMaterial::transmittance(const BaseHit& hit, const HitRoute& r, Vec3 ra
                                   std::array<float, 2> shift) const {
   // Only whether the ray meets yarn (or how often, over a footprint): no
   // shading frame, layer count or ply profile.
-  const Vec3 &fx = r.fx, &fy = r.fy, &e = r.e;
+  const Vec3 &fx = r.fx, &fy = r.fy;
   const std::optional<FootprintTable::SubBox>& box = r.box;
   const Route rt = Route(r.route);
   if (rt != Route::NearField) {

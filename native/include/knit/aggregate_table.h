@@ -132,10 +132,6 @@ class FootprintTable {
   // so the overloads taking it need not check it again (the routing of a
   // hit checks once, shades and attenuates with it).
   class SubBox {
-   public:
-    float x() const { return x_; }
-    float y() const { return y_; }
-
    private:
     friend class FootprintTable;
     struct Range {
@@ -270,9 +266,6 @@ class FootprintTable {
   // table without sub-cells or a box outside their domain, naming `caller`.
   SubBox checked_sub_box(const k::KnitGeom& g, float x, float y, float ex, float ey, const char* caller) const;
   void check_sub_cells(const char* caller) const;
-  // The hit fraction of pair `pair` in direction d (bilinear, clamped), as
-  // aggregate_sub sums it.
-  float sub_hit_fraction(int pair, const DirWeights& d) const;
   // The sub-cells a box touches and their overlap areas: calls
   // visit(row k, column c, the cell's index in class_of_ (knit_cell_index),
   // sub-cell index, area) for each.
