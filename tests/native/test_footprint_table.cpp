@@ -739,11 +739,6 @@ TEST(FootprintTable, QuarterCellBoxesMatchExplicitTubes) {
   EXPECT_LT(e.normal, 0.7 * e.normal_cell);
 }
 
-// The sub-cells come from the rays of the whole cells, split by where they
-// start: a (0,2)-net puts a sixteenth of them in each, so each linear
-// statistic of a node is the mean of its sixteen sub-cells' (to their
-// bfloat16 rounding); and they must differ from it, or they would resolve
-// nothing.
 // p_delta_sub and its per-class hits against their definition, summed in
 // double precision sub-cell by sub-cell: each sub-cell the box overlaps,
 // weighted by the overlap's area, with the bilinear hit fraction of its
@@ -831,6 +826,11 @@ TEST(FootprintTable, SubCellHitFractionsSumTheBoxOverlaps) {
   }
 }
 
+// The sub-cells come from the rays of the whole cells, split by where they
+// start: a (0,2)-net puts a sixteenth of them in each, so each linear
+// statistic of a node is the mean of its sixteen sub-cells' (to their
+// bfloat16 rounding); and they must differ from it, or they would resolve
+// nothing.
 TEST(FootprintTable, WholeCellsAreTheMeanOfTheirSubCells) {
   KnitSurface s(seed(), StitchParams{});
   const FootprintTable t(s, CapmOptions{}, 64);
