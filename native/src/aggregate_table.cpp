@@ -655,7 +655,7 @@ void FootprintTable::for_each_sub(const k::KnitGeom& g, const SubBox& box, Visit
   const int64_t kc0 = floor_div(rx.first, kSub);
   const int cm0 = k::k_modi(int(kc0), g.cols);  // (the box's columns stay far inside int: sub_box)
   for (int64_t j = ry.first; j <= ry.last; ++j) {
-    const double wy = std::min(ry.hi, double(j + 1)) - std::max(ry.lo, double(j));
+    const double wy = ry.overlap(j);
     if (!(wy > 0)) continue;
     const int64_t kr = floor_div(j, kSub);
     const int sy = int(j - kr * kSub);
@@ -669,7 +669,7 @@ void FootprintTable::for_each_sub(const k::KnitGeom& g, const SubBox& box, Visit
         ++kc;
         if (++cm == g.cols) cm = 0;
       }
-      const double wx = std::min(rx.hi, double(i + 1)) - std::max(rx.lo, double(i));
+      const double wx = rx.overlap(i);
       if (!(wx > 0)) continue;
       visit(int(kr), int(kc), row + size_t(cm), sy * kSub + int(i - kc * kSub), wx * wy);
     }
@@ -840,7 +840,7 @@ float FootprintTable::p_delta_sub(const KnitSurface& surface, const SubBox& box,
     const auto fold = [&](const SubBox::Range& r, bool classes, double* w, bool* met) {
       double sum = 0;
       for (int64_t i = r.first; i <= r.last; ++i) {
-        const double v = std::min(r.hi, double(i + 1)) - std::max(r.lo, double(i));
+        const double v = r.overlap(i);
         if (!(v > 0)) continue;
         const int64_t cell = floor_div(i, kSub);
         int slot = 0;

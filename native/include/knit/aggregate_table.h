@@ -137,6 +137,8 @@ class FootprintTable {
     struct Range {
       double lo, hi;  // the box, in sub-cells (exact doubles: x / cw in float loses the sub-cell at 1e4 units)
       int64_t first, last;  // the sub-cells it touches
+      // The box's overlap with sub-cell i (<= 0: none).
+      double overlap(int64_t i) const { return std::min(hi, double(i + 1)) - std::max(lo, double(i)); }
     };
     Range rx{}, ry{};
     float x_ = 0, y_ = 0;
