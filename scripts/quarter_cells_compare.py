@@ -12,8 +12,14 @@ printed per pixel and over 4 x 4 blocks, relative to the mean, with the bias
 and the share of knit hits the class table served. About 25 minutes on 2
 cores at the default 128 samples.
 
+A method name ending in "_sample" centres the multi-scale footprints at
+each sample's hit instead of its pixel's centre (footprint_centre).
+
   /usr/bin/python3 scripts/quarter_cells_compare.py BUILD_DIR OUT_DIR [SPP]
+      [--scenes half_cylinder_512,swatch_far,scarf]
+      [--methods near_field,multi_scale_0.5,multi_scale_0.25]
 """
+import argparse
 import json
 import math
 import os
@@ -41,17 +47,22 @@ def variant(scene, method):
             m["mode"] = "near_field"
         elif method.startswith("multi_scale"):
             m["mode"] = "multi_scale"
-            m["table_min_cells"] = 0.25 if method.endswith("0.25") else 0.5
+            m["table_min_cells"] = 0.25 if "0.25" in method else 0.5
+            m["footprint_centre"] = "sample" if method.endswith("_sample") else "pixel"
     return s
 
 
 def main():
-    if len(sys.argv) < 3:
-        print(__doc__)
-        sys.exit(2)
-    cli = os.path.join(sys.argv[1], "knitshade")
-    out = sys.argv[2]
-    spp = int(sys.argv[3]) if len(sys.argv) > 3 else 128
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("build")
+    ap.add_argument("out")
+    ap.add_argument("spp", nargs="?", type=int, default=128)
+    ap.add_argument("--scenes", default="half_cylinder_512,swatch_far,scarf")
+    ap.add_argument("--methods", default="near_field,multi_scale_0.5,multi_scale_0.25")
+    args = ap.parse_args()
+    cli = os.path.join(args.build, "knitshade")
+    out, spp = args.out, args.spp
+    methods = args.methods.split(",")
     os.makedirs(out, exist_ok=True)
 
     def compare(a, b, block):
@@ -60,8 +71,10 @@ def main():
 
     results = {}
     for name, scene in scenes().items():
+        if name not in args.scenes.split(","):
+            continue
         renders = {}
-        for method in ("explicit", "near_field", "multi_scale_0.5", "multi_scale_0.25"):
+        for method in ["explicit"] + methods:
             path = os.path.join(out, f"{name}_{method}.json")
             with open(path, "w") as f:
                 json.dump(variant(scene, method), f, indent=1)
@@ -86,7 +99,7 @@ def main():
         for block in (1, 4):
             noise = {m: compare(v[0]["image"], v[1]["image"], block)["rmse"] / math.sqrt(2)
                      for m, v in renders.items()}
-            for method in ("near_field", "multi_scale_0.5", "multi_scale_0.25"):
+            for method in methods:
                 d = compare(renders[method][0]["image"], renders["explicit"][0]["image"], block)
                 left = d["rmse"] ** 2 - noise[method] ** 2 - noise["explicit"] ** 2
                 systematic = math.sqrt(left) if left > 0 else None  # None: within the noise

@@ -7,6 +7,8 @@ namespace knit::render {
 void differentials_pass_through(const RayDifferential& in, const SurfaceInteraction& si, RayDifferential& out) {
   out.has_differentials = in.has_differentials && si.footprint.valid;
   out.diff_scale = in.diff_scale;
+  out.pixel_dx = in.pixel_dx;
+  out.pixel_dy = in.pixel_dy;
   if (!out.has_differentials) return;
   out.rx_o = si.p + si.footprint.dpdx;
   out.ry_o = si.p + si.footprint.dpdy;
@@ -23,6 +25,8 @@ void differentials_specular(const RayDifferential& in, const SurfaceInteraction&
                             RayDifferential& out) {
   out.has_differentials = in.has_differentials && si.footprint.valid;
   out.diff_scale = in.diff_scale;
+  out.pixel_dx = in.pixel_dx;
+  out.pixel_dy = in.pixel_dy;
   if (!out.has_differentials) return;
   const Footprint& f = si.footprint;
   const Vec3 wo = -in.d;

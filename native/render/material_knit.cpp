@@ -86,6 +86,7 @@ KnitModelMaterial::KnitModelMaterial(const KnitDesc& desc, std::shared_ptr<const
   }
   min_footprint_ = 1e-4f * model_->surface().cell_width();
   footprint_scale_ = desc.footprint_scale;
+  centre_at_pixel_ = desc.footprint_centre == FootprintCentre::Pixel;
   // A stretch worth a warning: over 1% of the UV area, or by 1.5 or more
   // anywhere. (A puffed cushion's corners, 0.1% of its UV area stretched by
   // at most 17%, do not show; a warning there only teaches users to ignore
@@ -116,7 +117,7 @@ size_t KnitModelMaterial::binding_bytes() const {
   return tables_.triangles.size() * sizeof(KnitTriangle) + (frame_ ? frame_->memory_bytes() : 0);
 }
 
-knit::BaseHit KnitModelMaterial::base_hit(const SurfaceInteraction& si, float diff_scale) const {
+knit::BaseHit KnitModelMaterial::base_hit(const SurfaceInteraction& si, float diff_scale, Vec2 pixel_offset) const {
   knit::BaseHit h;
   h.u = si.uv.x;
   h.v = si.uv.y;
@@ -135,6 +136,15 @@ knit::BaseHit KnitModelMaterial::base_hit(const SurfaceInteraction& si, float di
     h.dvdx = si.footprint.dvdx * k;
     h.dudy = si.footprint.dudy * k;
     h.dvdy = si.footprint.dvdy * k;
+    if (centre_at_pixel_) {
+      // The sample lies pixel_offset from its pixel's centre: the footprint's
+      // centre goes that far back (a footprint below a pixel part of the way,
+      // so that the boxes of the pixel's samples still reach its edges and
+      // always hold their own sample).
+      const float c = std::min(footprint_scale_, 1.0f) / diff_scale;
+      h.box_du = -c * (pixel_offset.x * si.footprint.dudx + pixel_offset.y * si.footprint.dudy);
+      h.box_dv = -c * (pixel_offset.x * si.footprint.dvdx + pixel_offset.y * si.footprint.dvdy);
+    }
   }
   return h;
 }
@@ -158,7 +168,7 @@ static Vec2 footprint_shift(const knit::KnitMaterial& model, const knit::KnitMat
 
 PassThrough KnitModelMaterial::resolve(SurfaceInteraction& si, const RayDifferential& ray, Sampler& sampler) const {
   PassThrough pt;
-  knit::BaseHit hit = base_hit(si, ray.diff_scale);
+  knit::BaseHit hit = base_hit(si, ray.diff_scale, {ray.pixel_dx, ray.pixel_dy});
   const knit::KnitMaterial& model = cone_footprint(si, ray.d, hit) ? *model_ : model_for(hit);
   const knit::KnitMaterial::HitRoute route = model.route_of(hit);  // (once for the shift and the shading)
   const Vec2 shift = footprint_shift(model, route, sampler);

@@ -71,8 +71,9 @@ class KnitModelMaterial final : public YarnShadedMaterial {
   const knit::KnitMaterial& model() const { return *model_; }
   // The BaseHit resolve() passes to the model; the UV footprint is scaled to
   // `footprint_scale` pixels (KnitDesc) from the ray's differentials, which
-  // are `diff_scale` pixels apart.
-  knit::BaseHit base_hit(const SurfaceInteraction& si, float diff_scale = 1.0f) const;
+  // are `diff_scale` pixels apart, and centred at the pixel's centre (a
+  // camera sample `pixel_offset` pixels from it; KnitDesc::footprint_centre).
+  knit::BaseHit base_hit(const SurfaceInteraction& si, float diff_scale = 1.0f, Vec2 pixel_offset = {}) const;
   const knit::FrameProvider* frame_provider() const { return frame_.get(); }
   // Renderer-side tables for this mesh (per-triangle data, the MeshFrame).
   size_t binding_bytes() const;
@@ -97,6 +98,7 @@ class KnitModelMaterial final : public YarnShadedMaterial {
   void apply_shade(SurfaceInteraction& si, const knit::KnitShade& sh, const knit::KnitMaterial& model) const;
   float min_footprint_ = 0;  // pattern units: smaller footprints count as none
   float footprint_scale_ = 1;  // pixels
+  bool centre_at_pixel_ = true;  // KnitDesc::footprint_centre
 
   std::shared_ptr<const knit::KnitMaterial> model_;
   std::shared_ptr<const knit::KnitMaterial> point_model_;

@@ -22,6 +22,11 @@ struct RayDifferential : Ray {
   // The offsets are this many pixels apart (the camera scales them with the
   // sample count; the knit model rescales its footprint to whole pixels).
   float diff_scale = 1.0f;
+  // A camera sample's offset from its pixel's centre, in pixels (-0.5 to
+  // 0.5), kept through pass-through and specular events with the
+  // differentials: the knit model centres a multi-scale footprint at the
+  // pixel's centre (KnitDesc::footprint_centre).
+  float pixel_dx = 0, pixel_dy = 0;
   // Past a non-specular bounce, where there are no differentials: the width
   // one pixel's footprint has at ray distance t is about
   // cone_width + t cone_spread (world units), as for a camera ray of the

@@ -45,7 +45,9 @@ RenderResult render_image(const Scene& scene, const RenderSettings& settings) {
         for (int s = 0; s < spp; ++s) {
           Sampler sampler(settings.seed, pixel, static_cast<uint64_t>(s), static_cast<uint32_t>(spp));
           const Vec2 j = sampler.get2d();
-          const RayDifferential ray = camera.generate(static_cast<float>(x) + j.x, static_cast<float>(y) + j.y, diff_scale);
+          RayDifferential ray = camera.generate(static_cast<float>(x) + j.x, static_cast<float>(y) + j.y, diff_scale);
+          ray.pixel_dx = j.x - 0.5f;
+          ray.pixel_dy = j.y - 0.5f;
           Rgb l;
           if (settings.mask_material >= 0) {
             ++stats.camera_rays;

@@ -87,6 +87,11 @@ struct ThinDesc {
 };
 
 // Where CAPM takes the base mesh's frame from (docs/scene-format.md#knit).
+enum class FootprintCentre {
+  Pixel,   // "pixel": the camera sample's pixel's centre
+  Sample,  // "sample": the sample's own hit
+};
+
 enum class KnitFrames {
   Exact,      // MeshFrame: exact lookups on the mesh (flat meshes need none)
   Curvature,  // the hit's frame turned with the mesh's curvature at the hit (no lookups)
@@ -106,6 +111,11 @@ struct KnitDesc {
   std::string frames_file;     // KnitFrames::Baked: the resolved frame image
   int explicit_samples = 32;   // explicit-yarn mode: polyline points per stitch
   float footprint_scale = 1;   // multi-scale footprint, in pixels (whatever the spp)
+  // Where a camera sample's multi-scale footprint is centred: at its pixel's
+  // centre, so that every sample of a pixel aggregates the same box (the
+  // pixel is averaged once), or at the sample's own hit (the pixel is
+  // averaged twice: by each box, then by the spread of the boxes).
+  FootprintCentre footprint_centre = FootprintCentre::Pixel;
 
   // The colour a diffuse preview uses: the first yarn colour.
   Rgb base_color() const;

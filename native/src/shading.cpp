@@ -320,7 +320,8 @@ KnitMaterial::Route KnitMaterial::route(const BaseHit& hit, Vec3& fx, Vec3& fy, 
   e = k::knit_footprint_extent(surface_.geom(), fx, fy);
   // A cell or more in both directions (knit_footprint_stratified's test).
   if (e.x >= 1.0f && e.y >= 1.0f) return table_ ? Route::Cells : Route::Marched;
-  if (std::optional<FootprintTable::SubBox> box = sub_cells_serve(params_.uv_scale * hit.u, params_.uv_scale * hit.v, e)) {
+  const float us = params_.uv_scale;
+  if (std::optional<FootprintTable::SubBox> box = sub_cells_serve(us * (hit.u + hit.box_du), us * (hit.v + hit.box_dv), e)) {
     if (sub) *sub = box;
     return Route::SubCells;
   }
@@ -376,6 +377,8 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, const HitRoute& r, Vec3 ray_di
   KnitShade sh = unshaded();
   const YarnBsdfParams& bp = params_.bsdf;
   const float S = hit.pattern_per_world;
+  // The footprint's centre (BaseHit::box_du); the near field's point is (x, y).
+  const float xc = params_.uv_scale * (hit.u + hit.box_du), yc = params_.uv_scale * (hit.v + hit.box_dv);
   const float x = params_.uv_scale * hit.u, y = params_.uv_scale * hit.v;
   const Vec3 wi = k::kv3_neg(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n));
   sh.from_back = wi.z < 0;
@@ -385,7 +388,7 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, const HitRoute& r, Vec3 ray_di
   const std::optional<FootprintTable::SubBox>& box = r.box;
   const Route rt = Route(r.route);
   sh.quarter_cell = rt == Route::NearField && params_.mode == KnitMode::MultiScale && table_ &&
-                    FootprintTable::sub_box(x, y, e.x, e.y, surface_.geom());  // (e is set in multi-scale only)
+                    FootprintTable::sub_box(xc, yc, e.x, e.y, surface_.geom());  // (e is set in multi-scale only)
   if (table_bsdf_ && (rt == Route::Cells || rt == Route::SubCells) && table_->one_colour()) {
     // The tabulated BSDF of a footprint of one colour index needs only the
     // hit fractions: its p_delta and each class's share of its hits (the
@@ -397,7 +400,7 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, const HitRoute& r, Vec3 ray_di
       sh.from_sub_cells = true;
     } else {
       const k::KFootprint f =
-          k::knit_footprint(surface_.geom(), x, y, fx, fy, footprint_points_for(fx, fy), shift[0], shift[1]);
+          k::knit_footprint(surface_.geom(), xc, yc, fx, fy, footprint_points_for(fx, fy), shift[0], shift[1]);
       p = table_->p_delta(surface_, f, wi, slot_hits.data());
     }
     sh.from_table = true;
@@ -426,14 +429,14 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, const HitRoute& r, Vec3 ray_di
       sh.from_table = true;
       sh.from_sub_cells = true;
     } else if (rt == Route::Cells) {
-      const k::KFootprint f = k::knit_footprint(surface_.geom(), x, y, fx, fy, points, shift[0], shift[1]);
+      const k::KFootprint f = k::knit_footprint(surface_.geom(), xc, yc, fx, fy, points, shift[0], shift[1]);
       a = table_->aggregate(surface_, f, wi, mix_out);  // flat-base statistics: no curvature needed
       sh.from_table = true;
     } else {
       // The footprint's points share the frame at the hit; a frame field
       // contributes its curvature there (pattern units).
-      const Vec3 kap = frame ? frame->curvature(x, y) : k::kv3(hit.kx / S, hit.ky / S, 0);
-      a = k::knit_aggregate(surface_.geom(), surface_.codes(), surface_.colors(), x, y, fx, fy, wi, points,
+      const Vec3 kap = frame ? frame->curvature(xc, yc) : k::kv3(hit.kx / S, hit.ky / S, 0);
+      a = k::knit_aggregate(surface_.geom(), surface_.codes(), surface_.colors(), xc, yc, fx, fy, wi, points,
                             shift[0], shift[1], kap.x, kap.y, params_.capm_options.max_segment,
                             params_.capm_options.max_steps);
       sh.aggregated = true;
@@ -462,7 +465,7 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, const HitRoute& r, Vec3 ray_di
       mix_colors(sh, a.color_w);
     }
     if (mix_out && use_table_bsdf(hit, wi, slot_hits.data(), u, sh, cw)) {
-      const Vec3 d = k::kv3_sub(a.position, k::kv3(x, y, top));
+      const Vec3 d = k::kv3_sub(a.position, k::kv3(xc, yc, top));
       sh.offset = k::kv3_scale(to_world(d, hit.t, hit.b, hit.n), 1.0f / S);
       return sh;
     }
@@ -501,7 +504,7 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, const HitRoute& r, Vec3 ray_di
     sh.st = to_world(local_t, hit.t, hit.b, hit.n);
     sh.sb = to_world(local_b, hit.t, hit.b, hit.n);
     sh.sn = to_world(local_n, hit.t, hit.b, hit.n);
-    const Vec3 d = k::kv3_sub(a.position, k::kv3(x, y, top));
+    const Vec3 d = k::kv3_sub(a.position, k::kv3(xc, yc, top));
     sh.offset = k::kv3_scale(to_world(d, hit.t, hit.b, hit.n), 1.0f / S);
     return sh;
   }
@@ -596,7 +599,7 @@ float KnitMaterial::transmittance(const BaseHit& hit, const HitRoute& r, Vec3 ra
   const Route rt = Route(r.route);
   if (rt != Route::NearField) {
     const float S = hit.pattern_per_world, us = params_.uv_scale;
-    const float x = us * hit.u, y = us * hit.v;
+    const float x = us * (hit.u + hit.box_du), y = us * (hit.v + hit.box_dv);  // the footprint's centre
     const Vec3 wi = k::kv3_neg(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n));
     if (rt == Route::SubCells) return table_->p_delta_sub(surface_, *box, wi);
     const k::KFootprint f =

@@ -334,6 +334,56 @@ TEST(KnitModelHits, BounceRaysUseTheClassTableWhenTheirConeCoversCells) {
   }
 }
 
+// A camera sample's multi-scale footprint is centred at its pixel's centre
+// (KnitDesc::footprint_centre "pixel"): wherever the sample lies in the
+// pixel, the footprint's centre is the UV where the ray through the pixel's
+// centre meets the (slanted) quad, traced on its own; "sample" keeps the
+// sample's own UV, and a footprint of half a pixel moves half the way.
+TEST(KnitModelHits, FootprintIsCentredAtThePixelsCentre) {
+  for (const char* centre : {"pixel", "sample"}) {
+    for (float scale : {1.0f, 0.5f, 2.0f}) {
+      SCOPED_TRACE(std::string(centre) + ", footprint_scale " + std::to_string(scale));
+      const std::string text = R"({
+        "film": {"width": 64, "height": 48, "spp": 16},
+        "camera": {"position": [0.3, 0.2, 4], "look_at": [0, 0, 0], "fov": 30},
+        "lights": [{"type": "point", "position": [0, 0, 3], "intensity": [1, 1, 1]}],
+        "materials": {"wool": {"type": "knit", "pattern": [[0]], "uv_scale": 40, "yarn_colors": [[0.5, 0.4, 0.3]],
+                               "mode": "multi_scale", "footprint_table": false,
+                               "footprint_centre": ")" + std::string(centre) + R"(", "footprint_scale": )" +
+                               std::to_string(scale) + R"(}},
+        "objects": [{"mesh": ")" + mesh("quad.obj") + R"(", "material": "wool",
+                     "transform": {"scale": 4, "rotate": [35, 20, 0]}}]
+      })";
+      Warnings w;
+      const Scene scene(parse_scene(text, "scene.json", test::test_dir()), BuildOptions{}, w);
+      const float diff_scale = 0.25f;  // 16 spp
+      for (const Vec2 pixel : {Vec2(20, 24), Vec2(33, 11), Vec2(50, 40)}) {
+        SurfaceInteraction c;
+        ASSERT_TRUE(scene.accel().intersect(scene.camera().generate(pixel.x + 0.5f, pixel.y + 0.5f), c));
+        for (const Vec2 j : {Vec2(0.02f, 0.97f), Vec2(0.9f, 0.75f), Vec2(0.5f, 0.5f), Vec2(0.3f, 0.1f)}) {
+          RayDifferential ray = scene.camera().generate(pixel.x + j.x, pixel.y + j.y, diff_scale);
+          SurfaceInteraction si;
+          ASSERT_TRUE(scene.accel().intersect(ray, si));
+          ASSERT_TRUE(si.footprint.valid);
+          const auto* m = dynamic_cast<const KnitModelMaterial*>(&scene.material(si.material));
+          ASSERT_NE(m, nullptr);
+          const knit::BaseHit h = m->base_hit(si, diff_scale, {j.x - 0.5f, j.y - 0.5f});
+          const float share = std::string(centre) == "pixel" ? std::min(scale, 1.0f) : 0.0f;
+          const float du = c.uv.x - si.uv.x, dv = c.uv.y - si.uv.y;
+          // The UV moves up to 0.006 from a pixel's corner to its centre here;
+          // the differentials' first order misses the perspective's second
+          // by about 0.5% of that.
+          const float move = std::fabs(du) + std::fabs(dv);
+          if (j.x != 0.5f) ASSERT_GT(move, 1e-3f);
+          EXPECT_NEAR(h.u + h.box_du, si.uv.x + share * du, 0.02f * share * move + 1e-6f);
+          EXPECT_NEAR(h.v + h.box_dv, si.uv.y + share * dv, 0.02f * share * move + 1e-6f);
+          EXPECT_EQ(h.u, si.uv.x);  // the near field's point stays the sample's
+        }
+      }
+    }
+  }
+}
+
 // Explicit yarns do not depend on the scene's absolute scale: a black
 // swatch seen straight down under a white sky lets through the same light
 // whether its tubes have radius 0.02 or 2e-4 world units (Embree 3 alone
@@ -689,6 +739,56 @@ TEST(KnitVsExplicit, SwatchCloseUpMultiScale) {
   EXPECT_LT(std::fabs(c.pixels.rel_bias), 0.05);
   EXPECT_LT(c.pixels.rel_mae, 0.2);
   EXPECT_LT(c.blocks.rel_rmse, 0.12);
+}
+
+// Footprints centred at their pixel's centre (footprint_centre "pixel")
+// against each sample's own hit ("sample"): the far swatch example seen at
+// its own pixel size (a third of a stitch cell), a 96 x 96 window of its
+// 480 x 360, with the table's quarter cells (table_min_cells 0.25) serving
+// every footprint. Each sample's box spread over the pixel averaged the
+// pixel twice and added noise; one box per pixel makes the image closer to
+// explicit yarns with less noise (docs/multiscale.md, "A footprint per
+// pixel").
+TEST(KnitVsExplicit, SwatchFarQuarterCellsCentredAtPixels) {
+  const int size = 96;
+  const auto render = [&](int method, int seed) {  // 0: explicit, 1: pixel, 2: sample
+    SceneDesc d = load_scene_file(test::source_dir() + "/examples/scenes/swatch_far.json");
+    const float half = 0.5f * d.camera.fov * 3.14159265f / 180;
+    d.camera.fov = 2 * std::atan(std::tan(half) * float(size) / float(d.film.height)) * 180 / 3.14159265f;
+    d.film.width = d.film.height = size;
+    d.film.spp = 64;
+    d.film.seed = seed;
+    for (MaterialDesc& m : d.materials) {
+      if (m.type != MaterialType::Knit) continue;
+      knit::KnitMaterialParams p = m.knit.model->params();
+      p.mode = knit::KnitMode::MultiScale;
+      p.table_min_cells = 0.25f;
+      m.knit.model = std::make_shared<const knit::KnitMaterial>(m.knit.model->surface().pattern(), p);
+      m.knit.footprint_centre = method == 2 ? FootprintCentre::Sample : FootprintCentre::Pixel;
+    }
+    BuildOptions o;
+    o.explicit_yarns = method == 0;
+    Warnings w;
+    const Scene sc(d, o, w);
+    RenderSettings s;
+    s.spp = d.film.spp;
+    s.seed = seed;
+    const RenderResult r = render_image(sc, s);
+    EXPECT_EQ(r.stats.invalid_samples, 0u);
+    if (method > 0) EXPECT_GT(r.stats.sub_cell_resolves, r.stats.resolves * 9 / 10) << "from the quarter cells";
+    return r.image;
+  };
+  const RgbImage truth = render(0, 1);
+  double noise[3] = {}, error[3] = {};
+  for (int method = 1; method <= 2; ++method) {
+    const RgbImage a = render(method, 1), b = render(method, 2);
+    noise[method] = compare_images(a, b).rmse / std::sqrt(2.0);  // one render's
+    error[method] = compare_images(a, truth).rmse;
+  }
+  std::printf("[pixel-centre] RMSE against explicit yarns: pixel %.5f, sample %.5f; noise %.5f, %.5f\n", error[1],
+              error[2], noise[1], noise[2]);
+  EXPECT_LT(noise[1], 0.8 * noise[2]);
+  EXPECT_LT(error[1], 0.95 * error[2]);
 }
 
 // The class table's shading under one light (docs/multiscale.md, "The

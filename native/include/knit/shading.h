@@ -76,6 +76,12 @@ struct BaseHit {
   float kx = 0, ky = 0;               // normal curvature along t and b (1 / world units; > 0 convex)
   // Footprint of the pixel in UV (multi-scale): (du/dx, dv/dx), (du/dy, dv/dy).
   float dudx = 0, dvdx = 0, dudy = 0, dvdy = 0;
+  // Multi-scale: the footprint's centre minus (u, v). A renderer that knows
+  // where a camera sample lies in its pixel centres the footprint at the
+  // pixel's centre, so that all of a pixel's samples aggregate one box and
+  // the pixel is not averaged twice (by its box, then by its samples'
+  // spread). The near field ignores it: its point is (u, v).
+  float box_du = 0, box_dv = 0;
   // Where a FrameProvider's lookups near (u, v) may start (FrameProvider::
   // frame_near's hint: for a mesh, the triangle hit); -1 when unknown.
   int64_t frame_hint = -1;
