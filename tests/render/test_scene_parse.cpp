@@ -309,6 +309,9 @@ TEST(SceneParse, KnitParameterRanges) {
             std::string::npos);
   EXPECT_NE(knit_error("mode", "far").find("materials.wool.mode: must be one of \"near_field\", \"multi_scale\""),
             std::string::npos);
+  EXPECT_NE(knit_error("footprint_centre", "middle").find("materials.wool.footprint_centre: must be one of \"pixel\", \"sample\""),
+            std::string::npos)
+      << knit_error("footprint_centre", "middle");
   EXPECT_NE(knit_error("capm", 1).find("materials.wool.capm: must be true or false, got number"), std::string::npos);
   EXPECT_NE(knit_error("self_shadowing", "yes").find("materials.wool.self_shadowing: must be true or false"),
             std::string::npos);
@@ -352,7 +355,7 @@ TEST(SceneParse, KnitMaterialMapsOntoTheModel) {
       "ply": {"ply_count": 2, "ply_twist": 45, "fiber_count": 20, "fiber_twist": -10},
       "mode": "multi_scale", "capm": false, "footprint_points": 8, "frames": "curvature", "explicit_samples": 12,
       "footprint_table": false, "table_min_cells": 0.75, "table_bsdf": false, "table_fold": false, "self_shadowing": false,
-      "near_field_below_cell": false})");
+      "near_field_below_cell": false, "footprint_scale": 0.5, "footprint_centre": "sample"})");
   const SceneDesc d = parse(j);
   const KnitDesc& k = d.materials[1].knit;
   ASSERT_TRUE(k.model);
@@ -389,6 +392,8 @@ TEST(SceneParse, KnitMaterialMapsOntoTheModel) {
   EXPECT_FALSE(p.near_field_below_cell);
   EXPECT_EQ(k.frames, KnitFrames::Curvature);
   EXPECT_EQ(k.explicit_samples, 12);
+  EXPECT_FLOAT_EQ(k.footprint_scale, 0.5f);
+  EXPECT_EQ(k.footprint_centre, FootprintCentre::Sample);
   EXPECT_EQ(k.model->surface().pattern().cols(), 2);
 }
 
