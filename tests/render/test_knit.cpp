@@ -596,6 +596,21 @@ struct Comparison {
   double seconds_model = 0, seconds_explicit = 0;
 };
 
+// Renders `d` at its film's samples and seed, with the model or as explicit
+// yarns; no sample may be invalid.
+RenderResult render_desc(const SceneDesc& d, bool explicit_yarns) {
+  BuildOptions o;
+  o.explicit_yarns = explicit_yarns;
+  Warnings w;
+  const Scene sc(d, o, w);
+  RenderSettings s;
+  s.spp = d.film.spp;
+  s.seed = d.film.seed;
+  RenderResult r = render_image(sc, s);
+  EXPECT_EQ(r.stats.invalid_samples, 0u);
+  return r;
+}
+
 // Renders examples/scenes/<scene> at size x size with the model and as
 // explicit yarns, each as two half-sample renders with different seeds (their
 // difference estimates the noise; their mean is the full-sample image).
@@ -612,15 +627,7 @@ Comparison compare_model_and_explicit(const std::string& scene, int size, int sp
       d.film.spp = spp / 2;
       d.film.seed = 100 + h;
       if (edit) edit(d);
-      BuildOptions o;
-      o.explicit_yarns = e == 1;
-      Warnings w;
-      const Scene sc(d, o, w);
-      RenderSettings s;
-      s.spp = d.film.spp;
-      s.seed = d.film.seed;
-      const RenderResult r = render_image(sc, s);
-      EXPECT_EQ(r.stats.invalid_samples, 0u);
+      const RenderResult r = render_desc(d, e == 1);
       (e ? c.seconds_explicit : c.seconds_model) += r.seconds;
       half[h] = r.image;
     }
@@ -766,15 +773,7 @@ TEST(KnitVsExplicit, SwatchFarQuarterCellsCentredAtPixels) {
       m.knit.model = std::make_shared<const knit::KnitMaterial>(m.knit.model->surface().pattern(), p);
       m.knit.footprint_centre = method == 2 ? FootprintCentre::Sample : FootprintCentre::Pixel;
     }
-    BuildOptions o;
-    o.explicit_yarns = method == 0;
-    Warnings w;
-    const Scene sc(d, o, w);
-    RenderSettings s;
-    s.spp = d.film.spp;
-    s.seed = seed;
-    const RenderResult r = render_image(sc, s);
-    EXPECT_EQ(r.stats.invalid_samples, 0u);
+    const RenderResult r = render_desc(d, method == 0);
     if (method > 0) EXPECT_GT(r.stats.sub_cell_resolves, r.stats.resolves * 9 / 10) << "from the quarter cells";
     return r.image;
   };
