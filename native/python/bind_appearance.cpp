@@ -666,8 +666,8 @@ KnitMaterial make_material(const Pattern& pattern, const StitchParams& stitch, :
 // The base hits of a shade()/transmittance() call, validated.
 struct HitArgs {
   Column u, v, ppw, kx, ky;
-  Rows ray, t, b, n, footprint, shift;
-  bool has_t = false, has_b = false, has_n = false, has_footprint = false;
+  Rows ray, t, b, n, footprint, shift, offset;
+  bool has_t = false, has_b = false, has_n = false, has_footprint = false, has_offset = false;
   const FrameProvider* frame = nullptr;
   float uv_scale = 1;
   ssize_t count = 1;
@@ -689,6 +689,11 @@ struct HitArgs {
       h.dvdx = float(f[1]);
       h.dudy = float(f[2]);
       h.dvdy = float(f[3]);
+      if (has_offset) {
+        const double* o = offset.row(i);
+        h.box_du = float(o[0]);
+        h.box_dv = float(o[1]);
+      }
     }
     return h;
   }
@@ -700,7 +705,7 @@ struct HitArgs {
 
 HitArgs hit_args(const KnitMaterial& m, ::py::handle u, ::py::handle v, ::py::handle ray_dir,
                  ::py::handle t, ::py::handle b, ::py::handle n, ::py::handle ppw, ::py::handle kx,
-                 ::py::handle ky, ::py::handle footprint, ::py::handle shift,
+                 ::py::handle ky, ::py::handle footprint, ::py::handle shift, ::py::handle offset,
                  const FrameProvider* frame) {
   HitArgs a;
   a.frame = frame;
@@ -775,6 +780,35 @@ HitArgs hit_args(const KnitMaterial& m, ::py::handle u, ::py::handle v, ::py::ha
     check_finite_rows(a.footprint);
     bc.add(a.footprint);
     a.has_footprint = true;
+  }
+  if (!offset.is_none()) {
+    // The footprint's centre minus (u, v): (u, v) must lie in the footprint,
+    // offset = -(jx (du/dx, dv/dx) + jy (du/dy, dv/dy)) with |jx|, |jy| <= 1/2.
+    if (!a.has_footprint) throw ::py::value_error("footprint_offset needs footprint");
+    a.offset = rows(offset, "footprint_offset", 2);
+    check_finite_rows(a.offset);
+    const ssize_t m2 = std::max(a.offset.single ? 1 : a.offset.n, a.footprint.single ? 1 : a.footprint.n);
+    for (ssize_t i = 0; i < m2; ++i) {
+      const double* f = a.footprint.row(a.footprint.single ? 0 : i);
+      const double* o = a.offset.row(a.offset.single ? 0 : i);
+      const double det = f[0] * f[3] - f[2] * f[1];
+      const bool row = !(a.offset.single && a.footprint.single);
+      const std::string at = row ? " in row " + std::to_string(i) : "";
+      if (!(std::abs(det) > 0)) {
+        if (o[0] != 0 || o[1] != 0)
+          throw ::py::value_error("footprint_offset" + at + " = (" + num(o[0]) + ", " + num(o[1]) +
+                                  "): the footprint has no area, so the offset must be 0");
+        continue;
+      }
+      // -offset = jx (f0, f1) + jy (f2, f3)
+      const double jx = (-o[0] * f[3] + o[1] * f[2]) / det, jy = (-o[1] * f[0] + o[0] * f[1]) / det;
+      if (!(std::abs(jx) <= 0.5 + 1e-6 && std::abs(jy) <= 0.5 + 1e-6))
+        throw ::py::value_error("footprint_offset" + at + " = (" + num(o[0]) + ", " + num(o[1]) +
+                                "): puts (u, v) outside its footprint (" + num(jx) + ", " + num(jy) +
+                                " footprints from the centre; at most 0.5 each way)");
+    }
+    bc.add(a.offset);
+    a.has_offset = true;
   }
   a.shift = rows(shift, "shift", 2);
   {
@@ -886,6 +920,12 @@ the base along t and b, 1/world units, > 0 convex, default 0; used when
 `frame` is None); footprint ((4,) or (N, 4): du/dx, dv/dx, du/dy, dv/dy of
 the pixel, multi-scale only; default 0); shift ((2,) or (N, 2) in [0, 1):
 Cranley-Patterson shift of the footprint's Sobol' points, default 0.5, 0.5);
+footprint_offset ((2,) or (N, 2), with footprint: the footprint's centre
+minus (u, v) in UV, multi-scale only; (u, v) must lie in the footprint. A
+renderer that knows where its sample lies in the pixel passes
+-(jx (du/dx, dv/dx) + jy (du/dy, dv/dy)), (jx, jy) the sample's offset from
+the pixel's centre in pixels, so that all of a pixel's samples aggregate
+the same footprint; default 0: the footprint is centred at (u, v));
 frame (a FlatFrame, CylinderFrame or SphereFrame in pattern units: bends the
 CAPM ray with the base surface; near field only).)doc";
 
@@ -897,13 +937,14 @@ void def_hit_method(::py::class_<KnitMaterial>& cls, const char* name, Fn fn, co
       name,
       [fn](const KnitMaterial& km, ::py::handle u, ::py::handle v, ::py::handle ray_dir, ::py::handle t,
            ::py::handle b, ::py::handle n, ::py::handle ppw, ::py::handle kx, ::py::handle ky,
-           ::py::handle footprint, ::py::handle shift, const FrameProvider* frame) {
-        return fn(km, hit_args(km, u, v, ray_dir, t, b, n, ppw, kx, ky, footprint, shift, frame));
+           ::py::handle footprint, ::py::handle shift, ::py::handle offset, const FrameProvider* frame) {
+        return fn(km, hit_args(km, u, v, ray_dir, t, b, n, ppw, kx, ky, footprint, shift, offset, frame));
       },
       ::py::arg("u"), ::py::arg("v"), ::py::arg("ray_dir"), ::py::kw_only(), ::py::arg("t") = ::py::none(),
       ::py::arg("b") = ::py::none(), ::py::arg("n") = ::py::none(), ::py::arg("pattern_per_world") = 1.0,
       ::py::arg("kx") = 0.0, ::py::arg("ky") = 0.0, ::py::arg("footprint") = ::py::none(),
-      ::py::arg("shift") = std::vector<double>{0.5, 0.5}, ::py::arg("frame") = nullptr,
+      ::py::arg("shift") = std::vector<double>{0.5, 0.5}, ::py::arg("footprint_offset") = ::py::none(),
+      ::py::arg("frame") = nullptr,
       (std::string(doc) + kHitDoc).c_str());
 }
 

@@ -827,6 +827,41 @@ class KnitMaterialMultiScale(unittest.TestCase):
             with self.assertRaisesRegex(ValueError, "table_min_cells"):
                 knitshade.KnitMaterial(seed_pattern(), mode="multi_scale", table_min_cells=bad)
 
+    def test_footprint_offset_moves_the_footprint_not_the_point(self):
+        # footprint_offset centres a multi-scale footprint away from (u, v):
+        # its aggregate is the one of a footprint centred there (compared
+        # with the material's own result at the moved point), and a hit
+        # shaded as the near field keeps (u, v).
+        m = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0)
+        n = 200
+        u, v = self.rng.uniform(0, 40, n), self.rng.uniform(0, 40, n)
+        d = -random_view(self.rng, n, 1.2)
+        fp = np.array([5.0, 0.4, -0.3, 4.0])  # 0.8 x 0.9 cells: the sub-cells
+        j = self.rng.uniform(-0.5, 0.5, (n, 2))
+        off = -(j[:, :1] * fp[[0, 1]] + j[:, 1:] * fp[[2, 3]])
+        moved = m.shade(u, v, d, footprint=fp, footprint_offset=off)
+        there = m.shade(u + off[:, 0], v + off[:, 1], d, footprint=fp)
+        np.testing.assert_allclose(moved["p_delta"], there["p_delta"], rtol=0, atol=1e-6)
+        np.testing.assert_allclose(m.transmittance(u, v, d, footprint=fp, footprint_offset=off),
+                                   there["p_delta"], rtol=0, atol=1e-6)
+        # (the offset is not a no-op: the footprints differ)
+        self.assertGreater(np.max(np.abs(moved["p_delta"] - m.shade(u, v, d, footprint=fp)["p_delta"])), 0.01)
+        small = [2.0, 0.0, 0.0, 1.5]  # the near field: the offset changes nothing
+        a = m.shade(u, v, d, footprint=small, footprint_offset=[-0.5, 0.3])
+        b = m.shade(u, v, d, footprint=small)
+        for key in a:
+            np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+        with self.assertRaisesRegex(ValueError, "footprint_offset needs footprint"):
+            m.shade(u, v, d, footprint_offset=[0.1, 0.0])
+        with self.assertRaisesRegex(ValueError, r"footprint_offset in row 3 = \(3, 0\): puts \(u, v\) outside"):
+            bad = np.zeros((n, 2))
+            bad[3] = [3.0, 0.0]
+            m.shade(u, v, d, footprint=fp, footprint_offset=bad)
+        with self.assertRaisesRegex(ValueError, "footprint_offset"):
+            m.shade(u, v, d, footprint=fp, footprint_offset=[float("nan"), 0.0])
+        with self.assertRaisesRegex(ValueError, "no area"):
+            m.shade(u, v, d, footprint=[0.0, 0.0, 0.0, 0.0], footprint_offset=[0.1, 0.0])
+
     def test_p_delta_is_a_probability_and_equals_transmittance(self):
         n = 300
         u, v = self.rng.uniform(0, 40, n), self.rng.uniform(0, 40, n)
