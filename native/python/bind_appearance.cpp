@@ -787,13 +787,13 @@ HitArgs hit_args(const KnitMaterial& m, ::py::handle u, ::py::handle v, ::py::ha
     if (!a.has_footprint) throw ::py::value_error("footprint_offset needs footprint");
     a.offset = rows(offset, "footprint_offset", 2);
     check_finite_rows(a.offset);
-    const ssize_t m2 = std::max(a.offset.single ? 1 : a.offset.n, a.footprint.single ? 1 : a.footprint.n);
+    bc.add(a.offset);  // (first: the rows below pair up only when the counts agree)
+    const bool single = a.offset.single && a.footprint.single;
+    const ssize_t m2 = single ? 1 : std::max(a.offset.single ? 1 : a.offset.n, a.footprint.single ? 1 : a.footprint.n);
     for (ssize_t i = 0; i < m2; ++i) {
-      const double* f = a.footprint.row(a.footprint.single ? 0 : i);
-      const double* o = a.offset.row(a.offset.single ? 0 : i);
+      const double *f = a.footprint.row(i), *o = a.offset.row(i);
       const double det = f[0] * f[3] - f[2] * f[1];
-      const bool row = !(a.offset.single && a.footprint.single);
-      const std::string at = row ? " in row " + std::to_string(i) : "";
+      const std::string at = single ? "" : " in row " + std::to_string(i);
       if (!(std::abs(det) > 0)) {
         if (o[0] != 0 || o[1] != 0)
           throw ::py::value_error("footprint_offset" + at + " = (" + num(o[0]) + ", " + num(o[1]) +
@@ -807,7 +807,6 @@ HitArgs hit_args(const KnitMaterial& m, ::py::handle u, ::py::handle v, ::py::ha
                                 "): puts (u, v) outside its footprint (" + num(jx) + ", " + num(jy) +
                                 " footprints from the centre; at most 0.5 each way)");
     }
-    bc.add(a.offset);
     a.has_offset = true;
   }
   a.shift = rows(shift, "shift", 2);

@@ -861,6 +861,8 @@ class KnitMaterialMultiScale(unittest.TestCase):
             m.shade(u, v, d, footprint=fp, footprint_offset=[float("nan"), 0.0])
         with self.assertRaisesRegex(ValueError, "no area"):
             m.shade(u, v, d, footprint=[0.0, 0.0, 0.0, 0.0], footprint_offset=[0.1, 0.0])
+        with self.assertRaisesRegex(ValueError, "footprint_offset has 5 rows but footprint has 3"):
+            m.shade(1.0, 2.0, [0.0, 0.0, -1.0], footprint=np.tile(fp, (3, 1)), footprint_offset=np.zeros((5, 2)))
 
     def test_p_delta_is_a_probability_and_equals_transmittance(self):
         n = 300
