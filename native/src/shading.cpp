@@ -320,8 +320,8 @@ KnitMaterial::Route KnitMaterial::route(const BaseHit& hit, Vec3& fx, Vec3& fy, 
   e = k::knit_footprint_extent(surface_.geom(), fx, fy);
   // A cell or more in both directions (knit_footprint_stratified's test).
   if (e.x >= 1.0f && e.y >= 1.0f) return table_ ? Route::Cells : Route::Marched;
-  const float us = params_.uv_scale;
-  if (std::optional<FootprintTable::SubBox> box = sub_cells_serve(us * (hit.u + hit.box_du), us * (hit.v + hit.box_dv), e)) {
+  const Vec3 c = footprint_centre(hit);
+  if (std::optional<FootprintTable::SubBox> box = sub_cells_serve(c.x, c.y, e)) {
     if (sub) *sub = box;
     return Route::SubCells;
   }
@@ -378,7 +378,8 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, const HitRoute& r, Vec3 ray_di
   const YarnBsdfParams& bp = params_.bsdf;
   const float S = hit.pattern_per_world;
   // The footprint's centre (BaseHit::box_du); the near field's point is (x, y).
-  const float xc = params_.uv_scale * (hit.u + hit.box_du), yc = params_.uv_scale * (hit.v + hit.box_dv);
+  const Vec3 centre = footprint_centre(hit);
+  const float xc = centre.x, yc = centre.y;
   const float x = params_.uv_scale * hit.u, y = params_.uv_scale * hit.v;
   const Vec3 wi = k::kv3_neg(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n));
   sh.from_back = wi.z < 0;
@@ -598,8 +599,9 @@ float KnitMaterial::transmittance(const BaseHit& hit, const HitRoute& r, Vec3 ra
   const std::optional<FootprintTable::SubBox>& box = r.box;
   const Route rt = Route(r.route);
   if (rt != Route::NearField) {
-    const float S = hit.pattern_per_world, us = params_.uv_scale;
-    const float x = us * (hit.u + hit.box_du), y = us * (hit.v + hit.box_dv);  // the footprint's centre
+    const float S = hit.pattern_per_world;
+    const Vec3 c = footprint_centre(hit);
+    const float x = c.x, y = c.y;
     const Vec3 wi = k::kv3_neg(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n));
     if (rt == Route::SubCells) return table_->p_delta_sub(surface_, *box, wi);
     const k::KFootprint f =

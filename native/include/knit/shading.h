@@ -250,6 +250,11 @@ class KnitMaterial {
   // marched aggregate. Sets the footprint's axes and extent (cells) for
   // the multi-scale routes.
   enum class Route { NearField, Cells, SubCells, Marched };
+  // The multi-scale footprint's centre in pattern space (x, y; z 0): the
+  // hit's UV moved by BaseHit::box_du, box_dv, times uv_scale.
+  Vec3 footprint_centre(const BaseHit& hit) const {
+    return k::kv3(params_.uv_scale * (hit.u + hit.box_du), params_.uv_scale * (hit.v + hit.box_dv), 0);
+  }
   // For Route::SubCells, `sub` (when given) gets the footprint's box.
   Route route(const BaseHit& hit, Vec3& fx, Vec3& fy, Vec3& extent,
               std::optional<FootprintTable::SubBox>* sub = nullptr) const;
