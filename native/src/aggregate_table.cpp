@@ -110,17 +110,20 @@ std::array<double, FootprintTable::kClasses> FootprintTable::class_cell_counts()
 }
 
 Vec3 FootprintTable::ray_origin(const k::KnitGeom& g, const std::pair<int, int>& cell, int node, int rays, int m,
-                                int* sub) {
+                                int* sub, int* eighth) {
   // The point inside the cell from a (0,2)-net: each run of 4^j of its
-  // points puts the same number in every sub-cell.
+  // points puts the same number in every sub-cell (and of 64 or more, in
+  // every eighth). An eighth lies in one sub-cell: ox * 8 is ox * 4 doubled.
   const Vec3 q = k::knit_sobol2(node * rays + m);  // other points per direction
   const float ox = k::knit_frac(q.x + 0.5f), oy = k::knit_frac(q.y + 0.5f);
   if (sub) *sub = std::min(int(oy * kSub), kSub - 1) * kSub + std::min(int(ox * kSub), kSub - 1);
+  if (eighth)
+    *eighth = std::min(int(oy * kEighth), kEighth - 1) * kEighth + std::min(int(ox * kEighth), kEighth - 1);
   return k::kv3((float(cell.second) + ox) * K_2PI, (float(cell.first) + oy) * g.row_spacing, 0);
 }
 
 FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& capm, int rays_per_direction,
-                               LayerCounts layer_counts, bool sub_cells) {
+                               LayerCounts layer_counts, bool sub_cells, bool eighths) {
   const k::KnitGeom& g = surface.geom();
   // The cells of each class.
   const ClassCells cells = class_cells(surface);
@@ -178,6 +181,10 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
   const auto sub_at = [&](size_t slot, int si, int node) {
     return &sub_f[((slot * kSubCells + size_t(si)) * kThetaBins * kPhiBins + size_t(node)) * kMoments];
   };
+  constexpr int kEighths = kEighth * kEighth;
+  // (64 rays or more: the net's first 64 points put one in every eighth)
+  const bool keep_eighths = sub_cells && eighths && rays_per_direction >= kEighths;
+  std::vector<float> eighth_f(keep_eighths ? size_t(slots) * kEighths * kThetaBins * kPhiBins : 0, 0.0f);
   const int m_rays = std::max(1, rays_per_direction);
   // The layer counts under the hits: a quarter of the build in scalar
   // counting queries, so batched on CPUs with a vector path (the same
@@ -246,6 +253,7 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
       const float side = wi.z < 0 ? -1.0f : 1.0f;
       Sums all;
       std::array<Sums, kSubCells> sub;
+      std::array<int, kEighths> e_rays{}, e_hits{};  // per eighth
       all.rays = m_rays;
       hx.clear();
       hy.clear();
@@ -254,12 +262,14 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
         // Cells of the class in turn (a stride coprime with most sizes
         // spreads them), the point inside the cell from ray_origin's net.
         const std::pair<int, int>& cell = list[(size_t(m) * 7919u) % list.size()];
-        int si = 0;
-        const Vec3 o = ray_origin(g, cell, it * kPhiBins + ip, m_rays, m, &si);
+        int si = 0, ei = 0;
+        const Vec3 o = ray_origin(g, cell, it * kPhiBins + ip, m_rays, m, &si, &ei);
         sub[size_t(si)].rays += 1;
+        ++e_rays[size_t(ei)];
         const k::KnitCapm st = k::knit_capm_curved(g, surface.codes(), surface.colors(), o.x, o.y, wi, 0, 0,
                                                    capm.max_segment, capm.max_steps);
         if (st.state != KNIT_CAPM_HIT) continue;
+        ++e_hits[size_t(ei)];
         const Vec3 sl = k::knit_ms_slopes(st.hit.n, side);  // as knit_aggregate takes them
         const int dk = std::clamp(st.hit.row - cell.first, -1, 1), dc = std::clamp(st.hit.col - cell.second, -1, 1);
         all.add(st.hit, sl, (dk + 1) * 3 + dc + 1);
@@ -285,6 +295,11 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
       all.write(&moments_[((slot * kThetaBins + size_t(it)) * kPhiBins + size_t(ip)) * kMoments]);
       if (sub_cells)
         for (int si = 0; si < kSubCells; ++si) sub[size_t(si)].write(sub_at(slot, si, it * kPhiBins + ip));
+      if (keep_eighths)
+        for (int ei = 0; ei < kEighths; ++ei)
+          if (e_rays[size_t(ei)] > 0)
+            eighth_f[(slot * kEighths + size_t(ei)) * kThetaBins * kPhiBins + size_t(it * kPhiBins + ip)] =
+                float(double(e_hits[size_t(ei)]) / double(e_rays[size_t(ei)]));
     }
   });
   // The rows at theta = 0 and pi are one direction each: their columns,
@@ -311,6 +326,16 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
   const size_t block = size_t(kThetaBins) * kPhiBins * kMoments;
   for (size_t b = 0; b < size_t(slots); ++b) average_poles(&moments_[b * block]);
   for (size_t b = 0; sub_cells && b < size_t(slots) * kSubCells; ++b) average_poles(&sub_f[b * block]);
+  // (the eighths' hit fractions likewise: a mean over each pole row)
+  for (size_t b = 0; b < eighth_f.size() / (size_t(kThetaBins) * kPhiBins); ++b)
+    for (int it : {0, kThetaBins - 1}) {
+      float* row = &eighth_f[(b * kThetaBins + size_t(it)) * kPhiBins];
+      float avg = 0;
+      for (int ip = 0; ip < kPhiBins; ++ip) avg += row[ip] / kPhiBins;
+      std::fill_n(row, kPhiBins, avg);
+    }
+  eighth_hits_.resize(eighth_f.size());
+  for (size_t i = 0; i < eighth_f.size(); ++i) eighth_hits_[i] = to_bf16(eighth_f[i]);
   if (one_colour_) {
     static_assert(kSubLinear1 == kNear + 1 && kSubStride1 >= kSubLinear1 + 3, "the one-colour sub-cell node");
     const size_t nodes = sub_f.size() / kMoments;
@@ -335,6 +360,12 @@ std::vector<float> FootprintTable::sub_moments() const {
     const int slot = int(i / size_t(per_slot)), rest = int(i % size_t(per_slot));
     sub_node(slot, rest / (kThetaBins * kPhiBins), rest % (kThetaBins * kPhiBins), &out[i * node]);
   }
+  return out;
+}
+
+std::vector<float> FootprintTable::eighth_hits() const {
+  std::vector<float> out(eighth_hits_.size());
+  for (size_t i = 0; i < out.size(); ++i) out[i] = from_bf16(eighth_hits_[i]);
   return out;
 }
 
@@ -636,12 +667,28 @@ std::optional<FootprintTable::SubBox> FootprintTable::sub_box_at(float x, float 
     r.last = ceil_i64(r.hi) - 1;
     return r;
   };
+  // (the same edges in eighths: doubled, still exact)
+  const auto eighths = [](const SubBox::Range& q) {
+    static_assert(kEighth == 2 * kSub, "an eighth is half a sub-cell");
+    SubBox::Range r;
+    r.lo = 2 * q.lo;
+    r.hi = 2 * q.hi;
+    r.first = floor_i64(r.lo);
+    r.last = ceil_i64(r.hi) - 1;
+    return r;
+  };
+  const auto count = [](const SubBox::Range& rx, const SubBox::Range& ry) {
+    return (rx.last - rx.first + 1) * (ry.last - ry.first + 1);
+  };
   SubBox box;
   box.rx = range(x, ex, K_2PI);
   box.ry = range(y, ey, g.row_spacing);
   box.x_ = x;
   box.y_ = y;
-  if ((box.rx.last - box.rx.first + 1) * (box.ry.last - box.ry.first + 1) > kMaxSubBox) return std::nullopt;
+  if (count(box.rx, box.ry) > kMaxSubBox) return std::nullopt;
+  box.ex = eighths(box.rx);
+  box.ey = eighths(box.ry);
+  box.eighths_ = count(box.ex, box.ey) <= kMaxEighthBox;
   return box;
 }
 
@@ -649,29 +696,29 @@ bool FootprintTable::sub_box(float x, float y, float ex, float ey, const k::Knit
   return sub_box_at(x, y, ex, ey, g).has_value();
 }
 
-template <class Visit>
-void FootprintTable::for_each_sub(const k::KnitGeom& g, const SubBox& box, Visit&& visit) {
-  const SubBox::Range &rx = box.rx, &ry = box.ry;
-  const int64_t kc0 = floor_div(rx.first, kSub);
+template <int S, class Visit>
+void FootprintTable::for_each_sub(const k::KnitGeom& g, const SubBox::Range& rx, const SubBox::Range& ry,
+                                  Visit&& visit) {
+  const int64_t kc0 = floor_div(rx.first, S);
   const int cm0 = k::k_modi(int(kc0), g.cols);  // (the box's columns stay far inside int: sub_box)
   for (int64_t j = ry.first; j <= ry.last; ++j) {
     const double wy = ry.overlap(j);
     if (!(wy > 0)) continue;
-    const int64_t kr = floor_div(j, kSub);
-    const int sy = int(j - kr * kSub);
+    const int64_t kr = floor_div(j, S);
+    const int sy = int(j - kr * S);
     // The cell's place in the pattern as knit_cell_index has it, its column
     // wrapped by hand along the row (no integer division per sub-cell).
     const size_t row = size_t(g.rows - 1 - k::k_modi(int(kr), g.rows)) * size_t(g.cols);
     int64_t kc = kc0;
     int cm = cm0;
     for (int64_t i = rx.first; i <= rx.last; ++i) {
-      if (i >= (kc + 1) * kSub) {
+      if (i >= (kc + 1) * S) {
         ++kc;
         if (++cm == g.cols) cm = 0;
       }
       const double wx = rx.overlap(i);
       if (!(wx > 0)) continue;
-      visit(int(kr), int(kc), row + size_t(cm), sy * kSub + int(i - kc * kSub), wx * wy);
+      visit(int(kr), int(kc), row + size_t(cm), sy * S + int(i - kc * S), wx * wy);
     }
   }
 }
@@ -710,6 +757,7 @@ k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, const
   constexpr int kSubCells = kSub * kSub;
   std::array<float, kLinear> sum{};
   Vec3 tsum = k::kv3(0, 0, 0);
+  const bool eighths = box.eighths_ && has_eighths();
   std::array<float, kClasses * kSubCells> hit_of;  // hit fraction per pair, for the colours
   std::fill_n(hit_of.begin(), slots_ * kSubCells, 0.0f);  // (the slots present)
   double hits = 0;
@@ -736,7 +784,7 @@ k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, const
       }
       hit_of[size_t(ps)] = std::clamp(h, 0.0f, 1.0f);
       hits += double(share) * double(hit_of[size_t(ps)]);
-      if (slot_hits) slot_hits[ps / kSubCells] += share * hit_of[size_t(ps)];
+      if (slot_hits && !eighths) slot_hits[ps / kSubCells] += share * hit_of[size_t(ps)];
     }
   };
   if (total > 0) {
@@ -747,7 +795,10 @@ k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, const
       sum_pairs(std::integral_constant<int, kMoments>{}, std::integral_constant<int, kLinear>{},
                 std::integral_constant<int, kTangent>{});
   }
-  if (!finish(a, sa.touched, std::clamp(float(1 - hits), 0.0f, 1.0f), sum.data(), tsum, x, y)) return a;
+  // The hit fraction (and the per-class hits) from the eighths where they
+  // apply, exactly as p_delta_sub gives them; the means from the quarters.
+  const float p_delta = eighths ? p_delta_sub(surface, box, wi, slot_hits) : std::clamp(float(1 - hits), 0.0f, 1.0f);
+  if (!finish(a, sa.touched, p_delta, sum.data(), tsum, x, y)) return a;
   if (one_colour_) {
     a.color_w[0] = 1;
     a.color_pick = 0;
@@ -759,7 +810,7 @@ k::KnitAggregate FootprintTable::aggregate_sub(const KnitSurface& surface, const
   double visit_hits = 0;
   bool picked = false;
   const double target = double(k::knit_frac(pick)) * hits * total;
-  for_each_sub(g, box, [&](int kr, int kc, size_t cell, int sub, double w) {
+  for_each_sub(g, box.rx, box.ry, [&](int kr, int kc, size_t cell, int sub, double w) {
     const int slot = slot_[class_of_[cell]];
     const float h = hit_of[size_t(slot * kSubCells + sub)];
     if (!(h > 0)) return;
@@ -815,8 +866,19 @@ float FootprintTable::p_delta_sub(const KnitSurface& surface, const SubBox& box,
   const k::KnitGeom& g = surface.geom();
   // Each touched (class slot, sub-cell) pair's hit fraction in direction
   // wi (bilinear over the four nodes around it, clamped, as aggregate_sub
-  // takes it) weighted by the box's overlap area on the pair.
+  // takes it) weighted by the box's overlap area on the pair: of eighths
+  // where the table keeps them and the box touches few enough.
   const DirWeights dw = dir_weights(wi);
+  if (box.eighths_ && has_eighths()) {
+    const size_t pair_block = size_t(kThetaBins) * kPhiBins;
+    const auto hit_of = [&](int pair) {
+      const uint16_t* p = &eighth_hits_[size_t(pair) * pair_block];
+      float h = 0;
+      for (int q = 0; q < 4; ++q) h += dw.w[size_t(q)] * from_bf16(p[dw.node[size_t(q)]]);
+      return double(std::clamp(h, 0.0f, 1.0f));
+    };
+    return sum_hits<kEighth>(g, box.ex, box.ey, hit_of, slot_hits);
+  }
   // the four nodes' offsets within a pair's block
   const size_t stride = one_colour_ ? size_t(kSubStride1) : size_t(kMoments);
   const size_t pair_block = size_t(kThetaBins) * kPhiBins * stride;
@@ -828,21 +890,27 @@ float FootprintTable::p_delta_sub(const KnitSurface& surface, const SubBox& box,
     for (int q = 0; q < 4; ++q) h += dw.w[size_t(q)] * from_bf16(p[at[size_t(q)]]);
     return double(std::clamp(h, 0.0f, 1.0f));
   };
+  return sum_hits<kSub>(g, box.rx, box.ry, hit_of, slot_hits);
+}
+
+template <int S, class HitOf>
+float FootprintTable::sum_hits(const k::KnitGeom& g, const SubBox::Range& rx, const SubBox::Range& ry,
+                               HitOf&& hit_of, float* slot_hits) const {
   std::array<double, kClasses> by_slot{};
   double hits = 0, total = 0;
   if (period_rows_ == 1 || period_cols_ == 1) {
     // Classes that change along one axis only (one class, ribs, welts): a
     // sub-cell's area is its column's overlap times its row's, and its pair
     // is its class and its place in the cell, so the box folds onto the
-    // places of one cell per class met along that axis (at most 16 pairs
-    // a class, however long the box).
+    // places of one cell per class met along that axis (at most S * S
+    // pairs a class, however long the box).
     const bool by_column = period_rows_ == 1;  // (else every column is alike)
     const auto fold = [&](const SubBox::Range& r, bool classes, double* w, bool* met) {
       double sum = 0;
       for (int64_t i = r.first; i <= r.last; ++i) {
         const double v = r.overlap(i);
         if (!(v > 0)) continue;
-        const int64_t cell = floor_div(i, kSub);
+        const int64_t cell = floor_div(i, S);
         int slot = 0;
         if (classes) {
           // (class_of_ as knit_cell_index has it: along a row, or down a column)
@@ -850,35 +918,36 @@ float FootprintTable::p_delta_sub(const KnitSurface& surface, const SubBox& box,
           slot = slot_[class_of_[by_column ? size_t(m) : size_t(g.rows - 1 - m) * size_t(g.cols)]];
         }
         met[slot] = true;
-        w[slot * kSub + int(i - cell * kSub)] += v;
+        w[slot * S + int(i - cell * S)] += v;
         sum += v;
       }
       return sum;
     };
     // (only the slots present cleared: a memset of the whole arrays cost
     // more than the fold)
-    double wc[kClasses * kSub], wo[kSub] = {0, 0, 0, 0};  // along the classes' axis, along the other
+    double wc[kClasses * S], wo[S];  // along the classes' axis, along the other
     bool met[kClasses], unused = false;
-    std::fill_n(wc, slots_ * kSub, 0.0);
+    std::fill_n(wc, slots_ * S, 0.0);
+    std::fill_n(wo, S, 0.0);
     std::fill_n(met, slots_, false);
-    total = fold(by_column ? box.rx : box.ry, true, wc, met) * fold(by_column ? box.ry : box.rx, false, wo, &unused);
+    total = fold(by_column ? rx : ry, true, wc, met) * fold(by_column ? ry : rx, false, wo, &unused);
     for (int slot = 0; slot < slots_; ++slot) {
       if (!met[slot]) continue;
       double sh = 0;
-      for (int a = 0; a < kSub; ++a) {
-        if (!(wc[slot * kSub + a] > 0)) continue;
+      for (int a = 0; a < S; ++a) {
+        if (!(wc[slot * S + a] > 0)) continue;
         double line = 0;
-        for (int o = 0; o < kSub; ++o)
-          if (wo[o] > 0) line += wo[o] * hit_of(slot * kSub * kSub + (by_column ? o * kSub + a : a * kSub + o));
-        sh += wc[slot * kSub + a] * line;
+        for (int o = 0; o < S; ++o)
+          if (wo[o] > 0) line += wo[o] * hit_of(slot * S * S + (by_column ? o * S + a : a * S + o));
+        sh += wc[slot * S + a] * line;
       }
       by_slot[size_t(slot)] = sh;
       hits += sh;
     }
   } else {
-    for_each_sub(g, box, [&](int, int, size_t cell, int sub, double w) {
+    for_each_sub<S>(g, rx, ry, [&](int, int, size_t cell, int sub, double w) {
       const int slot = slot_[class_of_[cell]];
-      const double wh = w * hit_of(slot * kSub * kSub + sub);
+      const double wh = w * hit_of(slot * S * S + sub);
       total += w;
       hits += wh;
       by_slot[size_t(slot)] += wh;
@@ -893,7 +962,7 @@ float FootprintTable::p_delta_sub(const KnitSurface& surface, const SubBox& box,
 FootprintTable::SubAreas FootprintTable::sub_areas(const k::KnitGeom& g, const SubBox& box) const {
   SubAreas sa;
   std::fill_n(sa.area.begin(), slots_ * kSub * kSub, 0.0);
-  for_each_sub(g, box, [&](int, int, size_t cell, int sub, double w) {
+  for_each_sub(g, box.rx, box.ry, [&](int, int, size_t cell, int sub, double w) {
     sa.area[size_t(slot_[class_of_[cell]] * kSub * kSub + sub)] += w;
     sa.total += w;
     ++sa.touched;

@@ -55,8 +55,9 @@ TableCacheSettings g_settings;  // dir empty: off
 constexpr char kMagic[8] = {'K', 'N', 'I', 'T', 'T', 'B', 'L', '1'};
 // A key's first string. Format 3 (2026-12-02): a finished table weighs its
 // classes by their cells counted over the whole pattern (format 2 counted a
-// sample of at most 1024 per class).
-constexpr const char* kKeyFormat = "knitshade class table, format 3";
+// sample of at most 1024 per class). Format 4 (2026-12-05): the class
+// table keeps hit fractions per eighth of a cell.
+constexpr const char* kKeyFormat = "knitshade class table, format 4";
 // A key's second string: its stage's name.
 const char* stage_name(TableBsdf::Stage stage) {
   return stage == TableBsdf::Stage::Shadows ? "shadows" : stage == TableBsdf::Stage::Marched ? "marches" : "finished";
@@ -256,6 +257,7 @@ struct TableCacheCodec {
     io(t.slots_);
     io.vec(t.moments_);
     io.vec(t.sub_moments_);
+    io.vec(t.eighth_hits_);
     io.vec(t.class_of_);
     io(t.one_colour_);
     io(t.single_class_);
@@ -320,6 +322,11 @@ struct TableCacheCodec {
     if (!t.sub_moments_.empty() &&
         t.sub_moments_.size() != size_t(slots) * FootprintTable::kSub * FootprintTable::kSub * nodes * sub_stride)
       return false;
+    // (eighths only beside sub-cells)
+    if (!t.eighth_hits_.empty() &&
+        (t.sub_moments_.empty() ||
+         t.eighth_hits_.size() != size_t(slots) * FootprintTable::kEighth * FootprintTable::kEighth * nodes))
+      return false;
     if (t.class_of_.size() != size_t(rows) * size_t(cols)) return false;
     if (!t.prefix_.empty() && t.prefix_.size() != size_t(prow) * size_t(slots) * (size_t(pcol) + 1)) return false;
     int present = 0;
@@ -338,7 +345,11 @@ struct TableCacheCodec {
     // exponent all ones is either)
     return std::all_of(t.moments_.begin(), t.moments_.end(), [](float x) { return std::isfinite(x); }) &&
            std::all_of(t.sub_moments_.begin(), t.sub_moments_.end(),
-                       [](uint16_t v) { return (v & 0x7f80u) != 0x7f80u; });
+                       [](uint16_t v) { return (v & 0x7f80u) != 0x7f80u; }) &&
+           std::all_of(t.eighth_hits_.begin(), t.eighth_hits_.end(), [](uint16_t v) {
+             const float h = FootprintTable::from_bf16(v);  // a fraction (NaN fails)
+             return h >= 0 && h <= 1;
+           });
   }
   // (and of the stage asked for: a marched table is neither folded nor has
   // rows; shadows are bits of `marches` rays per view node, and no values)

@@ -635,9 +635,12 @@ TEST(FootprintTable, FootprintsBelowACellAreTheNearFieldOrMarchPointsInProportio
 // 32 grid per box), from in front and behind, the fraction of rays passing
 // through and the mean normal; and the sub-cells must be closer to the
 // tubes than the whole cell they lie in, which is all a table of whole
-// cells can give a box below a cell.
+// cells can give a box below a cell. The hit fractions come from the
+// eighths of a cell where the box touches few enough of them; the same
+// table without its eighths (quarters alone) is measured beside them.
 struct SubCellErrors {
   double p_delta = 0, p_delta_cell = 0, worst = 0;  // means over the boxes, and the worst
+  double p_delta_quarters = 0;                      // the same table without its eighths
   double normal = 0, normal_cell = 0;               // mean angles (degrees), boxes with a mean normal
   int boxes = 0, normals = 0;
 };
@@ -650,8 +653,9 @@ SubCellErrors sub_cells_against_tubes(double lo, double hi, double box_normal_bo
   for (const NamedPattern& np : groundtruth_patterns()) {
     GroundTruthScene sc(np.pattern, StitchParams{}, 0, 45);
     const FootprintTable table(sc.surface, CapmOptions{});
+    const FootprintTable quarters(sc.surface, CapmOptions{}, 256, FootprintTable::LayerCounts::Auto, true, false);
     const double cw = 6.283185307179586, ch = sc.surface.geom().row_spacing;
-    double pat_sub = 0, pat_cell = 0;
+    double pat_sub = 0, pat_cell = 0, pat_quarters = 0;
     int pat_boxes = 0;
     for (double th_deg : {0.0, 30.0, 55.0, 125.0}) {
       const double th = th_deg * kPiD / 180;
@@ -687,10 +691,13 @@ SubCellErrors sub_cells_against_tubes(double lo, double hi, double box_normal_bo
           }
         const double pd = double(through) / (G * G);
         const double e_sub = std::fabs(a.p_delta - pd), e_cell = std::fabs(pd_cell - pd);
+        const double e_quarters = std::fabs(quarters.p_delta_sub(sc.surface, cx, cy, float(ex), float(ey), wif) - pd);
         r.p_delta += e_sub;
         r.p_delta_cell += e_cell;
+        r.p_delta_quarters += e_quarters;
         pat_sub += e_sub;
         pat_cell += e_cell;
+        pat_quarters += e_quarters;
         r.worst = std::max(r.worst, e_sub);
         ++r.boxes;
         ++pat_boxes;
@@ -703,23 +710,29 @@ SubCellErrors sub_cells_against_tubes(double lo, double hi, double box_normal_bo
         }
       }
     }
-    std::printf("[ sub-cells %s ] %-20s mean |p_delta - explicit|: sub-cells %.4f, whole cell %.4f (%d boxes)\n",
-                label, np.name.c_str(), pat_sub / pat_boxes, pat_cell / pat_boxes, pat_boxes);
+    std::printf("[ sub-cells %s ] %-20s mean |p_delta - explicit|: sub-cells %.4f (quarters alone %.4f), whole "
+                "cell %.4f (%d boxes)\n",
+                label, np.name.c_str(), pat_sub / pat_boxes, pat_quarters / pat_boxes, pat_cell / pat_boxes,
+                pat_boxes);
   }
   r.p_delta /= std::max(r.boxes, 1);
   r.p_delta_cell /= std::max(r.boxes, 1);
+  r.p_delta_quarters /= std::max(r.boxes, 1);
   r.normal = sum_n / std::max(r.normals, 1);
   r.normal_cell = sum_n_cell / std::max(r.normals, 1);
-  std::printf("[ sub-cells %s ] all: mean |p_delta - explicit| sub-cells %.4f, whole cell %.4f, worst %.4f; "
-              "mean normal %.2f deg (whole cell %.2f) over %d boxes\n",
-              label, r.p_delta, r.p_delta_cell, r.worst, r.normal, r.normal_cell, r.normals);
+  std::printf("[ sub-cells %s ] all: mean |p_delta - explicit| sub-cells %.4f (quarters alone %.4f), whole cell "
+              "%.4f, worst %.4f; mean normal %.2f deg (whole cell %.2f) over %d boxes\n",
+              label, r.p_delta, r.p_delta_quarters, r.p_delta_cell, r.worst, r.normal, r.normal_cell, r.normals);
   return r;
 }
 
 // Boxes of half a cell to 0.7 of a cell (table_min_cells' default 0.5).
+// Measured 2026-12-05: p_delta 0.0163 (quarters alone 0.0212, whole cell
+// 0.0386), normals 4.2 deg (9.4).
 TEST(FootprintTable, SubCellsMatchExplicitTubes) {
   const SubCellErrors e = sub_cells_against_tubes(0.5, 0.7, 25.0, "0.5-0.7");
-  EXPECT_LT(e.p_delta, 0.03);
+  EXPECT_LT(e.p_delta, 0.02);
+  EXPECT_LT(e.p_delta, 0.85 * e.p_delta_quarters) << "the eighths must resolve what the quarters cannot";
   EXPECT_LT(e.p_delta, 0.7 * e.p_delta_cell) << "the sub-cells must resolve what the whole cell cannot";
   EXPECT_LT(e.normal, 6.0);
   EXPECT_LT(e.normal, 0.7 * e.normal_cell);
@@ -728,12 +741,13 @@ TEST(FootprintTable, SubCellsMatchExplicitTubes) {
 // Boxes of a quarter to 0.45 of a cell (table_min_cells down to 0.25): each
 // overlaps two or three sub-cells a side, whose statistics reach beyond the
 // box, so the errors are about twice those of boxes of half a cell.
-// Measured 2026-12-05: p_delta 0.044 (whole cell 0.074), normals 9.2 deg
-// (17.1), worst box 35.3 deg (docs/multiscale.md, "Footprints of a quarter
-// cell").
+// Measured 2026-12-05: p_delta 0.0285 (quarters alone 0.0439, whole cell
+// 0.0737), normals 9.2 deg (17.1), worst box 35.3 deg (docs/multiscale.md,
+// "Footprints of a quarter cell" and "Eighths of a cell: the gaps").
 TEST(FootprintTable, QuarterCellBoxesMatchExplicitTubes) {
   const SubCellErrors e = sub_cells_against_tubes(0.25, 0.45, 40.0, "0.25-0.45");
-  EXPECT_LT(e.p_delta, 0.055);
+  EXPECT_LT(e.p_delta, 0.035);
+  EXPECT_LT(e.p_delta, 0.75 * e.p_delta_quarters) << "the eighths must resolve what the quarters cannot";
   EXPECT_LT(e.p_delta, 0.7 * e.p_delta_cell) << "the sub-cells must resolve what the whole cell cannot";
   EXPECT_LT(e.normal, 11.0);
   EXPECT_LT(e.normal, 0.7 * e.normal_cell);
@@ -742,12 +756,13 @@ TEST(FootprintTable, QuarterCellBoxesMatchExplicitTubes) {
 // p_delta_sub and its per-class hits against their definition, summed in
 // double precision sub-cell by sub-cell: each sub-cell the box overlaps,
 // weighted by the overlap's area, with the bilinear hit fraction of its
-// class and place in the cell (the stored, bfloat16-rounded statistics).
-// The table folds boxes over one cell when the classes change along one
-// axis only: ribs (by column), garter (by row), one class; seed takes the
-// visit of every sub-cell. Boxes up to the 64 sub-cells sub_box allows,
-// anywhere (negative coordinates, far from the origin), views from both
-// sides.
+// class and place in the cell (the stored, bfloat16-rounded statistics):
+// eighths of a cell where the box touches at most kMaxEighthBox of them,
+// else quarters. The table folds boxes over one cell when the classes
+// change along one axis only: ribs (by column), garter (by row), one class;
+// seed takes the visit of every sub-cell. Boxes up to the 64 sub-cells
+// sub_box allows, anywhere (negative coordinates, far from the origin),
+// views from both sides.
 TEST(FootprintTable, SubCellHitFractionsSumTheBoxOverlaps) {
   struct Case {
     const char* name;
@@ -756,21 +771,33 @@ TEST(FootprintTable, SubCellHitFractionsSumTheBoxOverlaps) {
   for (const Case& cs : {Case{"rib_2x2", 0}, Case{"stockinette", 0}, Case{"garter", 1}, Case{"seed", 2}}) {
     KnitSurface s(example(cs.name), StitchParams{});
     const FootprintTable table(s, CapmOptions{});
+    ASSERT_TRUE(table.has_eighths());
     if (cs.axis == 0) EXPECT_EQ(table.period_rows(), 1) << cs.name;
     if (cs.axis == 1) EXPECT_EQ(table.period_cols(), 1) << cs.name;
     if (cs.axis == 2) EXPECT_TRUE(table.period_rows() > 1 && table.period_cols() > 1) << cs.name;
-    const std::vector<float> sm = table.sub_moments();
     const int nodes = FootprintTable::kThetaBins * FootprintTable::kPhiBins;
-    const int sub = FootprintTable::kSub, pairs = table.classes_present() * sub * sub;
-    const size_t stride = sm.size() / (size_t(pairs) * size_t(nodes));  // floats a node; the hit fraction first
-    ASSERT_GT(stride, 0u);
+    // The stored hit fractions at each resolution: floats a node, the hit
+    // fraction first.
+    struct Level {
+      int sub;
+      std::vector<float> values;
+      size_t stride;
+    };
+    const auto level = [&](int sub, std::vector<float> values) {
+      const size_t pairs = size_t(table.classes_present()) * size_t(sub * sub);
+      return Level{sub, values, values.size() / (pairs * size_t(nodes))};
+    };
+    const Level quarters = level(FootprintTable::kSub, table.sub_moments());
+    const Level eighths = level(FootprintTable::kEighth, table.eighth_hits());
+    ASSERT_GT(quarters.stride, 0u);
+    ASSERT_EQ(eighths.stride, 1u);
     // (the cell's width as the kernel has it, 2 pi in float: a column is
     // [c K_2PI, (c + 1) K_2PI), which far from the origin differs from the
     // double's by a good part of 1e-4 sub-cells)
     const double cw = double(K_2PI), ch = s.geom().row_spacing;
     std::mt19937 rng(77);
     std::uniform_real_distribution<double> U(0, 1);
-    int boxes = 0, long_boxes = 0;
+    int boxes = 0, long_boxes = 0, eighth_boxes = 0;
     double worst = 0;
     for (int b = 0; b < 400; ++b) {
       const double ex = 0.25 + (b % 3 == 0 ? 2.5 : 0.75) * U(rng), ey = 0.25 + (b % 3 == 1 ? 2.5 : 0.75) * U(rng);
@@ -781,47 +808,62 @@ TEST(FootprintTable, SubCellHitFractionsSumTheBoxOverlaps) {
       const k::kvec3 wi = k::kv3(float(std::sin(th) * std::cos(ph)), float(std::sin(th) * std::sin(ph)),
                                  float(std::cos(th)));
       const SphereNodes dn = sphere_nodes(wi, FootprintTable::kThetaBins, FootprintTable::kPhiBins);
-      // The definition, in double.
+      // The definition, in double, at `lv`'s resolution; false when the box
+      // touches more than `most` of its sub-cells.
       const double fex = double(float(ex)), fey = double(float(ey));  // as p_delta_sub takes them
-      const double xlo = (double(x) / cw - 0.5 * fex) * sub, xhi = (double(x) / cw + 0.5 * fex) * sub;
-      const double ylo = (double(y) / ch - 0.5 * fey) * sub, yhi = (double(y) / ch + 0.5 * fey) * sub;
       double area = 0, hits = 0;
       std::array<double, FootprintTable::kClasses> by_slot{};
       int touched = 0;
-      for (int64_t j = int64_t(std::floor(ylo)); j < int64_t(std::ceil(yhi)); ++j)
-        for (int64_t i = int64_t(std::floor(xlo)); i < int64_t(std::ceil(xhi)); ++i) {
-          const double w = (std::min(xhi, double(i + 1)) - std::max(xlo, double(i))) *
-                           (std::min(yhi, double(j + 1)) - std::max(ylo, double(j)));
-          if (!(w > 0)) continue;
-          ++touched;
-          const int64_t kr = int64_t(std::floor(double(j) / sub)), kc = int64_t(std::floor(double(i) / sub));
-          const int slot = table.slot_of(FootprintTable::cell_class(s, int(kr), int(kc)));
-          ASSERT_GE(slot, 0);
-          const int pair = slot * sub * sub + int(j - kr * sub) * sub + int(i - kc * sub);
-          double h = 0;
-          for (int q = 0; q < 4; ++q)
-            h += double(dn.w[size_t(q)]) * sm[(size_t(pair) * size_t(nodes) + size_t(dn.node[size_t(q)])) * stride];
-          h = std::clamp(h, 0.0, 1.0);
-          area += w;
-          hits += w * h;
-          by_slot[size_t(slot)] += w * h;
-        }
+      const auto define = [&](const Level& lv, int most) {
+        const int sub = lv.sub;
+        const double xlo = (double(x) / cw - 0.5 * fex) * sub, xhi = (double(x) / cw + 0.5 * fex) * sub;
+        const double ylo = (double(y) / ch - 0.5 * fey) * sub, yhi = (double(y) / ch + 0.5 * fey) * sub;
+        if ((std::ceil(xhi) - std::floor(xlo)) * (std::ceil(yhi) - std::floor(ylo)) > most) return false;
+        area = hits = 0;
+        by_slot.fill(0);
+        touched = 0;
+        for (int64_t j = int64_t(std::floor(ylo)); j < int64_t(std::ceil(yhi)); ++j)
+          for (int64_t i = int64_t(std::floor(xlo)); i < int64_t(std::ceil(xhi)); ++i) {
+            const double w = (std::min(xhi, double(i + 1)) - std::max(xlo, double(i))) *
+                             (std::min(yhi, double(j + 1)) - std::max(ylo, double(j)));
+            if (!(w > 0)) continue;
+            ++touched;
+            const int64_t kr = int64_t(std::floor(double(j) / sub)), kc = int64_t(std::floor(double(i) / sub));
+            const int slot = table.slot_of(FootprintTable::cell_class(s, int(kr), int(kc)));
+            EXPECT_GE(slot, 0);
+            const int pair = slot * sub * sub + int(j - kr * sub) * sub + int(i - kc * sub);
+            double h = 0;
+            for (int q = 0; q < 4; ++q)
+              h += double(dn.w[size_t(q)]) *
+                   lv.values[(size_t(pair) * size_t(nodes) + size_t(dn.node[size_t(q)])) * lv.stride];
+            h = std::clamp(h, 0.0, 1.0);
+            area += w;
+            hits += w * h;
+            by_slot[size_t(slot)] += w * h;
+          }
+        return true;
+      };
+      const bool in_eighths = define(eighths, FootprintTable::kMaxEighthBox);
+      if (!in_eighths) define(quarters, 1 << 30);
       ASSERT_GT(area, 0);
       const double ref = std::clamp(1 - hits / area, 0.0, 1.0);
       std::array<float, FootprintTable::kClasses> got_slots{};
       const float got = table.p_delta_sub(s, x, y, float(ex), float(ey), wi, got_slots.data());
-      EXPECT_NEAR(got, ref, 2e-6) << cs.name << " box " << b << " at " << x << ", " << y << ": " << ex << " x " << ey;
+      EXPECT_NEAR(got, ref, 2e-6) << cs.name << " box " << b << " at " << x << ", " << y << ": " << ex << " x " << ey
+                                  << (in_eighths ? " (eighths)" : " (quarters)");
       for (int sl = 0; sl < table.classes_present(); ++sl)
         EXPECT_NEAR(got_slots[size_t(sl)], by_slot[size_t(sl)] / area, 2e-6)
             << cs.name << " box " << b << " slot " << sl;
       worst = std::max(worst, std::abs(double(got) - ref));
       ++boxes;
-      if (touched > 2 * sub * sub) ++long_boxes;
+      eighth_boxes += in_eighths;
+      if (!in_eighths && touched > 2 * quarters.sub * quarters.sub) ++long_boxes;
     }
     std::printf("[ sub-cells ] %-12s p_delta_sub against the sub-cell sum in double: worst %.2e over %d boxes "
-                "(%d of more than 32 sub-cells)\n",
-                cs.name, worst, boxes, long_boxes);
+                "(%d in eighths, %d of more than 32 quarters)\n",
+                cs.name, worst, boxes, eighth_boxes, long_boxes);
     EXPECT_GT(boxes, 200) << cs.name;
+    EXPECT_GT(eighth_boxes, 30) << cs.name << ": too few boxes to test the eighths";
     EXPECT_GT(long_boxes, 20) << cs.name << ": too few long boxes to test the fold";
   }
 }
@@ -830,7 +872,7 @@ TEST(FootprintTable, SubCellHitFractionsSumTheBoxOverlaps) {
 // start: a (0,2)-net puts a sixteenth of them in each, so each linear
 // statistic of a node is the mean of its sixteen sub-cells' (to their
 // bfloat16 rounding); and they must differ from it, or they would resolve
-// nothing.
+// nothing. Likewise a sub-cell's hit fraction and its four eighths'.
 TEST(FootprintTable, WholeCellsAreTheMeanOfTheirSubCells) {
   KnitSurface s(seed(), StitchParams{});
   const FootprintTable t(s, CapmOptions{}, 64);
@@ -859,6 +901,41 @@ TEST(FootprintTable, WholeCellsAreTheMeanOfTheirSubCells) {
   EXPECT_LT(worst, 1.0 / 512 + 1e-6);  // bfloat16's rounding, 2^-9 of the largest value
   EXPECT_GT(worst, 0.0) << "stored in float: the bound above is loose";
   EXPECT_GT(spread, 0.2);
+
+  // The eighths' hit fractions: each sub-cell's is the mean of the four
+  // eighths inside it (both rounded to bfloat16: 2^-9 of 1 each), and they
+  // differ from it (with 64 rays a direction, an eighth holds one ray: its
+  // hit fraction is 0 or 1, its sub-cell's a mean of four).
+  constexpr int kE = FootprintTable::kEighth, kEighths = kE * kE, kS = FootprintTable::kSub;
+  const std::vector<float> eighth = t.eighth_hits();
+  ASSERT_EQ(eighth.size(), size_t(t.classes_present()) * kEighths * kNodes);
+  double worst_e = 0, spread_e = 0;
+  int both = 0;
+  for (int slot = 0; slot < t.classes_present(); ++slot)
+    for (int node = 0; node < kNodes; ++node)
+      for (int si = 0; si < kSubs; ++si) {
+        const int sy = si / kS, sx = si % kS;
+        const float q = sub[((size_t(slot) * kSubs + size_t(si)) * kNodes + size_t(node)) * kStats];
+        double mean = 0;
+        for (int dy = 0; dy < 2; ++dy)
+          for (int dx = 0; dx < 2; ++dx) {
+            const int ei = (2 * sy + dy) * kE + 2 * sx + dx;
+            const float v = eighth[(size_t(slot) * kEighths + size_t(ei)) * kNodes + size_t(node)];
+            EXPECT_TRUE(v >= 0 && v <= 1) << v;
+            mean += v / 4;
+            spread_e = std::max(spread_e, double(std::fabs(v - q)));
+            both += v > 0 && v < 1;
+          }
+        worst_e = std::max(worst_e, std::fabs(mean - q));
+      }
+  std::printf("eighths: worst gap to their sub-cell's hit fraction %.2g; widest spread %.3f; %d of them neither 0 "
+              "nor 1 (the poles' means)\n",
+              worst_e, spread_e, both);
+  EXPECT_LT(worst_e, 2.0 / 512 + 1e-6);
+  EXPECT_GT(spread_e, 0.4);
+  // Without eighths (or with too few rays to put one in each): none kept.
+  EXPECT_FALSE(FootprintTable(s, CapmOptions{}, 64, FootprintTable::LayerCounts::Auto, true, false).has_eighths());
+  EXPECT_FALSE(FootprintTable(s, CapmOptions{}, 32).has_eighths());
 }
 
 // Which footprints the material reads from the sub-cells: at least

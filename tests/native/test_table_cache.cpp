@@ -104,7 +104,7 @@ bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
 }
 
 // Everything the tables answer, compared bit for bit: the class table's
-// node and sub-cell statistics, the tabulated BSDF's every stored value,
+// node and sub-cell statistics and its eighths' hit fractions, the tabulated BSDF's every stored value,
 // and (unless `shading` is false: materials whose parameters differ where
 // the tables do not) the shading of footprints of a cell and more seen from
 // a few sides.
@@ -115,6 +115,7 @@ void expect_same_tables(const KnitMaterial& a, const KnitMaterial& b, bool shadi
   EXPECT_EQ(ta.classes_present(), tb.classes_present());
   EXPECT_TRUE(same_bits(ta.node_moments(), tb.node_moments()));
   EXPECT_TRUE(same_bits(ta.sub_moments(), tb.sub_moments()));
+  EXPECT_TRUE(same_bits(ta.eighth_hits(), tb.eighth_hits()));
   EXPECT_EQ(ta.one_colour(), tb.one_colour());
   EXPECT_EQ(ta.period_rows(), tb.period_rows());
   EXPECT_EQ(ta.period_cols(), tb.period_cols());

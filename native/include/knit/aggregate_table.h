@@ -86,12 +86,14 @@ class FootprintTable {
   enum class LayerCounts { Auto, Scalar };
   // Marches `rays_per_direction` rays (flat base) per class present and per
   // direction; uses every hardware thread.
-  // sub_cells: also keep the per-sub-cell statistics (aggregate_sub); a
-  // table without them takes 36 KiB per class present instead of 228 KiB
-  // (324 KiB for patterns of several colour indices).
+  // sub_cells: also keep the per-sub-cell statistics (aggregate_sub) and,
+  // with eighths, the hit fractions per eighth of a cell; a table without
+  // sub-cells takes 36 KiB per class present instead of 276 KiB (372 KiB
+  // for patterns of several colour indices; 48 KiB less without eighths).
   FootprintTable(const KnitSurface& surface, const CapmOptions& capm, int rays_per_direction = 256,
-                 LayerCounts layer_counts = LayerCounts::Auto, bool sub_cells = true);
+                 LayerCounts layer_counts = LayerCounts::Auto, bool sub_cells = true, bool eighths = true);
   bool has_sub_cells() const { return !sub_moments_.empty(); }
+  bool has_eighths() const { return !eighth_hits_.empty(); }
   // The node statistics (kMoments floats per class present and direction
   // node), for tests.
   const std::vector<float>& node_moments() const { return moments_; }
@@ -120,12 +122,19 @@ class FootprintTable {
   // from the same rays, stored as bfloat16), and a
   // box of ex x ey cells centred on pattern point (x, y) is the sum over
   // the sub-cells it overlaps, each weighted by the area of the overlap.
+  // The hit fractions alone are also kept per eighth of a cell (kEighth x
+  // kEighth, "Eighths of a cell: the gaps"): a box that touches at most
+  // kMaxEighthBox of them takes its hit fraction and per-class hits (its
+  // p_delta, and the tabulated BSDF's mix) from the eighths, its means
+  // from the quarters.
   // Its domain: at least kMinSubBox (a quarter) of a cell in both
   // directions and at most kMaxSubBox sub-cells touched (sub_box). Bigger boxes take aggregate()'s
   // whole cells. `pick` in [0, 1) picks the colour of one hit sub-cell for
   // patterns with more colours than the histogram has bins.
   static constexpr int kSub = 4;
   static constexpr int kMaxSubBox = 64;
+  static constexpr int kEighth = 8;
+  static constexpr int kMaxEighthBox = 64;
   static constexpr float kMinSubBox = 0.25f;  // cells: one sub-cell on a side
   static bool sub_box(float x, float y, float ex, float ey, const k::KnitGeom& g);
   // A box sub_box accepted, in sub-cell units: only sub_box_at makes one,
@@ -141,6 +150,8 @@ class FootprintTable {
       double overlap(int64_t i) const { return std::min(hi, double(i + 1)) - std::max(lo, double(i)); }
     };
     Range rx{}, ry{};
+    Range ex{}, ey{};       // the same box in eighths of a cell
+    bool eighths_ = false;  // it touches at most kMaxEighthBox of them
     float x_ = 0, y_ = 0;
   };
   // The box of ex x ey cells at (x, y), when sub_box accepts it.
@@ -161,6 +172,10 @@ class FootprintTable {
   // sub-cell and direction node, as stored: rounded to bfloat16; the
   // neighbour shares zero for a pattern of one colour index), for tests.
   std::vector<float> sub_moments() const;
+  // The hit fraction per class present, eighth of a cell (sy * kEighth +
+  // sx) and direction node, as stored (bfloat16); empty without eighths.
+  // For tests.
+  std::vector<float> eighth_hits() const;
   bool one_colour() const { return one_colour_; }
 
   // Class (0..9) of cell (row k from the bottom, column c) of the surface.
@@ -174,9 +189,9 @@ class FootprintTable {
   std::array<double, kClasses> class_cell_counts() const;
   // Where ray m of `rays` for direction node `node` enters cell `cell`
   // (pattern x, y; z 0): a (0,2)-net over the cell, different per node;
-  // `sub`, when given, receives its sub-cell.
+  // `sub` and `eighth`, when given, receive its sub-cell and its eighth.
   static Vec3 ray_origin(const k::KnitGeom& g, const std::pair<int, int>& cell, int node, int rays, int m,
-                         int* sub = nullptr);
+                         int* sub = nullptr, int* eighth = nullptr);
   // The slot of class cls (-1 when absent) and the class of a slot.
   int slot_of(int cls) const { return slot_[size_t(cls)]; }
   int class_of_slot(int slot) const { return class_of_slot_[size_t(slot)]; }
@@ -196,7 +211,7 @@ class FootprintTable {
 
   size_t bytes() const {
     return sizeof(*this) + moments_.size() * sizeof(float) + sub_moments_.size() * sizeof(uint16_t) +
-           class_of_.size() + prefix_.size() * sizeof(uint16_t);
+           eighth_hits_.size() * sizeof(uint16_t) + class_of_.size() + prefix_.size() * sizeof(uint16_t);
   }
   int classes_present() const { return slots_; }
 
@@ -270,9 +285,16 @@ class FootprintTable {
   void check_sub_cells(const char* caller) const;
   // The sub-cells a box touches and their overlap areas: calls
   // visit(row k, column c, the cell's index in class_of_ (knit_cell_index),
-  // sub-cell index, area) for each.
-  template <class Visit>
-  static void for_each_sub(const k::KnitGeom& g, const SubBox& box, Visit&& visit);
+  // sub-cell index, area) for each; S sub-cells a side (kSub, or kEighth
+  // with the box's eighths' ranges).
+  template <int S = kSub, class Visit>
+  static void for_each_sub(const k::KnitGeom& g, const SubBox::Range& rx, const SubBox::Range& ry, Visit&& visit);
+  // p_delta_sub's sum over the box's ranges rx, ry of S sub-cells a cell,
+  // hit_of(slot * S * S + sub-cell) the hit fraction of a (slot, sub-cell)
+  // pair in the direction at hand.
+  template <int S, class HitOf>
+  float sum_hits(const k::KnitGeom& g, const SubBox::Range& rx, const SubBox::Range& ry, HitOf&& hit_of,
+                 float* slot_hits) const;
   // Fills a from `points`, the box's p_delta, its summed moments `sum`
   // (kLinear floats) and tangent sum `tsum`: the hit count, and the
   // hit-weighted means (normal, tangent, height at (x, y), slope covariance,
@@ -310,6 +332,9 @@ class FootprintTable {
   // (8 significant bits, 0.4% at most, far below the statistics' sampling
   // error of several percent), read back by a shift.
   std::vector<uint16_t> sub_moments_;
+  // [slot][eighth][theta][phi]: the hit fraction per eighth of a cell on a
+  // side (sy * kEighth + sx), as bfloat16; empty without sub-cells.
+  std::vector<uint16_t> eighth_hits_;
   std::vector<unsigned char> class_of_;  // class of each pattern cell, by knit_cell_index
   bool one_colour_ = true;               // every cell has colour index 0
   int single_class_ = -1;                // the class of every cell, when the pattern has one
