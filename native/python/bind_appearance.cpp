@@ -1207,7 +1207,7 @@ return the shading point (knit/shading.h).
 
 KnitMaterial(pattern, stitch=StitchParams(), bsdf=None, ply=None,
 mode='near_field', capm=True, ply_detail=True, footprint_points=4,
-footprint_table=True, table_min_cells=0.5, table_bsdf=True, table_fold=True, self_shadowing=True,
+footprint_table=True, table_min_cells=0.25, table_bsdf=True, table_fold=True, self_shadowing=True,
 near_field_below_cell=True, uv_scale=40.0, max_steps=32, max_segment=6.2832,
 max_bend=0.05)
 
@@ -1242,7 +1242,7 @@ max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
            ::py::kw_only(), ::py::arg("bsdf") = ::py::none(), ::py::arg("ply") = ::py::none(),
            ::py::arg("mode") = "near_field", ::py::arg("capm") = true,
            ::py::arg("ply_detail") = true, ::py::arg("footprint_points") = 4,
-           ::py::arg("footprint_table") = true, ::py::arg("table_min_cells") = 0.5,
+           ::py::arg("footprint_table") = true, ::py::arg("table_min_cells") = double(KnitMaterialParams{}.table_min_cells),
            ::py::arg("table_bsdf") = true, ::py::arg("table_fold") = true,
            ::py::arg("self_shadowing") = true,
            ::py::arg("near_field_below_cell") = true, ::py::arg("uv_scale") = 40.0, ::py::arg("max_steps") = 32,

@@ -726,7 +726,8 @@ SubCellErrors sub_cells_against_tubes(double lo, double hi, double box_normal_bo
   return r;
 }
 
-// Boxes of half a cell to 0.7 of a cell (table_min_cells' default 0.5).
+// Boxes of half a cell to 0.7 of a cell (table_min_cells 0.5, the default
+// until the eighths).
 // Measured 2026-12-05: p_delta 0.0163 (quarters alone 0.0212, whole cell
 // 0.0386), normals 4.2 deg (9.4).
 TEST(FootprintTable, SubCellsMatchExplicitTubes) {
@@ -945,7 +946,8 @@ TEST(FootprintTable, WholeCellsAreTheMeanOfTheirSubCells) {
 TEST(FootprintTable, MaterialReadsSubCellsFromTableMinCells) {
   KnitMaterialParams mp;
   mp.mode = KnitMode::MultiScale;
-  EXPECT_EQ(mp.table_min_cells, 0.5f);
+  EXPECT_EQ(mp.table_min_cells, FootprintTable::kMinSubBox);  // the default: the sub-cells' own size
+  mp.table_min_cells = 0.5f;
   KnitMaterial half(seed(), mp);
   mp.table_min_cells = 1;
   KnitMaterial whole(seed(), mp);
@@ -991,9 +993,9 @@ TEST(FootprintTable, MaterialReadsSubCellsFromTableMinCells) {
   EXPECT_FLOAT_EQ(t.pass_through ? 1.0f : t.point.p_delta, pd);
   size(0.45f, 0.8f);  // below half a cell in one direction: the near field
   EXPECT_TRUE(half.near_field_at(hit));
-  {  // ... unless table_min_cells goes down to the sub-cells' own size
-    KnitMaterialParams qp = mp;
-    qp.table_min_cells = FootprintTable::kMinSubBox;
+  {  // ... unless table_min_cells goes down to the sub-cells' own size (the default)
+    KnitMaterialParams qp;
+    qp.mode = KnitMode::MultiScale;
     const KnitMaterial quarter(seed(), qp);
     EXPECT_FALSE(quarter.near_field_at(hit));
     EXPECT_TRUE(quarter.shade(hit, dir, nullptr).from_table);

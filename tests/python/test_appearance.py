@@ -799,10 +799,11 @@ class KnitMaterialMultiScale(unittest.TestCase):
             knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", table_fold="no")
 
     def test_sub_cells_come_from_the_table(self):
-        # By default (table_min_cells=0.5) a footprint of half a cell to a
-        # cell comes from the class table's sub-cells: no march, and not
-        # the near field; below half a cell, the near field.
-        m = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0)
+        # With table_min_cells=0.5 a footprint of half a cell to a cell
+        # comes from the class table's sub-cells: no march, and not the
+        # near field; below half a cell, the near field.
+        m = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0,
+                                   table_min_cells=0.5)
         self.assertAlmostEqual(m.table_min_cells, 0.5)
         near = knitshade.KnitMaterial(seed_pattern(), self.stitch, uv_scale=1.0)
         n = 300
@@ -818,11 +819,13 @@ class KnitMaterialMultiScale(unittest.TestCase):
         small = m.shade(u, v, d, footprint=[2.0, 0.0, 0.0, 1.5])  # 0.32 x 0.33 cells: the near field
         for key in nf:
             np.testing.assert_array_equal(small[key], nf[key], err_msg=key)
-        # table_min_cells=0.25, the sub-cells' own size: that footprint from
-        # the table too.
-        quarter = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0,
-                                         table_min_cells=0.25)
+        # table_min_cells=0.25, the sub-cells' own size and the default:
+        # that footprint from the table too.
+        quarter = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0)
+        self.assertAlmostEqual(quarter.table_min_cells, 0.25)
         self.assertTrue(np.all(quarter.shade(u, v, d, footprint=[2.0, 0.0, 0.0, 1.5])["steps"] == 0))
+        self.assertFalse(np.array_equal(quarter.shade(u, v, d, footprint=[2.0, 0.0, 0.0, 1.5])["sn"],
+                                        nf["sn"], equal_nan=True))
         for bad in (0.2, 1.5, float("nan")):
             with self.assertRaisesRegex(ValueError, "table_min_cells"):
                 knitshade.KnitMaterial(seed_pattern(), mode="multi_scale", table_min_cells=bad)
@@ -846,7 +849,7 @@ class KnitMaterialMultiScale(unittest.TestCase):
                                    there["p_delta"], rtol=0, atol=1e-6)
         # (the offset is not a no-op: the footprints differ)
         self.assertGreater(np.max(np.abs(moved["p_delta"] - m.shade(u, v, d, footprint=fp)["p_delta"])), 0.01)
-        small = [2.0, 0.0, 0.0, 1.5]  # the near field: the offset changes nothing
+        small = [1.0, 0.0, 0.0, 0.8]  # below a quarter cell, the near field: the offset changes nothing
         a = m.shade(u, v, d, footprint=small, footprint_offset=[-0.5, 0.3])
         b = m.shade(u, v, d, footprint=small)
         for key in a:
@@ -906,7 +909,7 @@ class KnitMaterialMultiScale(unittest.TestCase):
         points = math.ceil(self.agg.footprint_points * 2.5 * 2.0 / cell)
         self.assertEqual(points, 1)
         many = knitshade.KnitMaterial(seed_pattern(), self.stitch, mode="multi_scale", uv_scale=1.0,
-                                      footprint_points=16, near_field_below_cell=False)
+                                      footprint_points=16, near_field_below_cell=False, table_min_cells=1.0)
         self.assertEqual(math.ceil(16 * 2.5 * 2.0 / cell), 3)
         sh16 = many.shade(u, v, -wi, footprint=[2.5, 0.0, 0.0, 2.0], shift=[0.3, 0.7])
         ag16 = self.surf.aggregate(u, v, [2.5, 0.0], [0.0, 2.0], wi, 3, 0.3, 0.7)

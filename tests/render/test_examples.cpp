@@ -59,16 +59,17 @@ TEST(Examples, EverySceneLoadsAndRenders) {
   }
 }
 
-// At their default size (480 x 360) the far swatch's footprints are mostly
-// below a stitch cell, so multi-scale mode shades them as the near field,
-// and the distant swatch (stitches a third the size) has every footprint a
-// cell or more, read from the class table (README, "Examples").
+// At their default size (480 x 360) the far swatch's footprints are a
+// third of a stitch cell, so multi-scale mode reads them from the class
+// table's sub-cells (table_min_cells 0.25), and the distant swatch
+// (stitches a third the size) has every footprint a cell or more, read from
+// its whole cells (README, "Examples").
 TEST(Examples, SwatchesFarAndDistantAreInTheirRegimes) {
   struct Case {
     const char* name;
-    double min_table_share, max_table_share;
+    double min_table_share, max_table_share, min_sub_share, max_sub_share;  // shares of the knit hits
   };
-  for (const Case& c : {Case{"swatch_far.json", 0.0, 0.1}, Case{"swatch_distant.json", 0.99, 1.0}}) {
+  for (const Case& c : {Case{"swatch_far.json", 0.95, 1.0, 0.95, 1.0}, Case{"swatch_distant.json", 0.99, 1.0, 0.0, 0.01}}) {
     SCOPED_TRACE(c.name);
     SceneDesc d = load_scene_file(test::source_dir() + "/examples/scenes/" + c.name);
     ASSERT_EQ(d.film.width, 480);
@@ -80,23 +81,28 @@ TEST(Examples, SwatchesFarAndDistantAreInTheirRegimes) {
                 static_cast<unsigned long long>(r.stats.resolves));
     EXPECT_GE(share, c.min_table_share);
     EXPECT_LE(share, c.max_table_share);
+    const double sub = double(r.stats.sub_cell_resolves) / double(r.stats.resolves);
+    std::printf("[examples] %s: %.1f%% from its sub-cells\n", c.name, 100 * sub);
+    EXPECT_GE(sub, c.min_sub_share);
+    EXPECT_LE(sub, c.max_sub_share);
   }
 }
 
-// The far swatch at its default table_min_cells (0.5) shades most of its
-// footprints as the near field, and counts those of a quarter cell or more
-// (the report's hint names table_min_cells 0.25 then); with 0.25 they come
-// from the class table's sub-cells (docs/multiscale.md, "Footprints of a
-// quarter cell") and none is counted.
+// The far swatch at its default table_min_cells (0.25) takes its
+// footprints from the class table's sub-cells (docs/multiscale.md,
+// "Footprints of a quarter cell") and counts none as a quarter cell shaded
+// as the near field; with 0.5 (the default until the eighths) it shades
+// most of them as the near field, counts those, and the report's hint names
+// table_min_cells 0.25.
 TEST(Examples, SwatchFarFromTheTableWithQuarterCells) {
-  for (const float min_cells : {0.5f, 0.25f}) {
+  for (const float min_cells : {0.25f, 0.5f}) {
     SCOPED_TRACE(min_cells);
     SceneDesc d = load_scene_file(test::source_dir() + "/examples/scenes/swatch_far.json");
     d.film.spp = 1;
     for (MaterialDesc& m : d.materials) {
       if (m.type != MaterialType::Knit) continue;
       KnitMaterialParams p = m.knit.model->params();
-      ASSERT_EQ(p.table_min_cells, 0.5f);  // (the example's, the default)
+      ASSERT_EQ(p.table_min_cells, 0.25f);  // (the example's, the default)
       p.table_min_cells = min_cells;
       m.knit.model = std::make_shared<const KnitMaterial>(m.knit.model->surface().pattern(), p);
     }

@@ -42,8 +42,10 @@ struct KnitMaterialParams {
   // Multi-scale with the class table: the smallest footprint, in stitch
   // cells in both directions, that the table serves, in [0.25, 1]. Below 1,
   // footprints of table_min_cells up to a cell come from its sub-cell
-  // statistics (docs/multiscale.md, "Footprints below a cell: sub-cells").
-  float table_min_cells = 0.5f;
+  // statistics (docs/multiscale.md, "Footprints below a cell: sub-cells";
+  // the default was 0.5 until the eighths' hit fractions, "Eighths of a
+  // cell: the gaps").
+  float table_min_cells = 0.25f;
   // Multi-scale with the class table: shade its footprints with the
   // tabulated BSDF (TableBsdf: the near field's shading and self-shadowing
   // averaged per class and pair of directions, built with the table);
