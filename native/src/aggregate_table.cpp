@@ -334,8 +334,13 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
       for (int ip = 0; ip < kPhiBins; ++ip) avg += row[ip] / kPhiBins;
       std::fill_n(row, kPhiBins, avg);
     }
+  // (stored [slot][node][eighth]: a lookup reads one direction's eighths)
+  const size_t dirs = size_t(kThetaBins) * kPhiBins;
   eighth_hits_.resize(eighth_f.size());
-  for (size_t i = 0; i < eighth_f.size(); ++i) eighth_hits_[i] = to_bf16(eighth_f[i]);
+  for (size_t i = 0; i < eighth_f.size(); ++i) {
+    const size_t slot = i / (kEighths * dirs), ei = i / dirs % kEighths, node = i % dirs;
+    eighth_hits_[(slot * dirs + node) * kEighths + ei] = to_bf16(eighth_f[i]);
+  }
   if (one_colour_) {
     static_assert(kSubLinear1 == kNear + 1 && kSubStride1 >= kSubLinear1 + 3, "the one-colour sub-cell node");
     const size_t nodes = sub_f.size() / kMoments;
@@ -364,8 +369,12 @@ std::vector<float> FootprintTable::sub_moments() const {
 }
 
 std::vector<float> FootprintTable::eighth_hits() const {
+  constexpr size_t kEighths = kEighth * kEighth, nodes = size_t(kThetaBins) * kPhiBins;
   std::vector<float> out(eighth_hits_.size());
-  for (size_t i = 0; i < out.size(); ++i) out[i] = from_bf16(eighth_hits_[i]);
+  for (size_t i = 0; i < out.size(); ++i) {  // (stored [slot][node][eighth])
+    const size_t slot = i / (kEighths * nodes), ei = i / nodes % kEighths, node = i % nodes;
+    out[i] = from_bf16(eighth_hits_[(slot * nodes + node) * kEighths + ei]);
+  }
   return out;
 }
 
@@ -870,11 +879,16 @@ float FootprintTable::p_delta_sub(const KnitSurface& surface, const SubBox& box,
   // where the table keeps them and the box touches few enough.
   const DirWeights dw = dir_weights(wi);
   if (box.eighths_ && has_eighths()) {
-    const size_t pair_block = size_t(kThetaBins) * kPhiBins;
-    const auto hit_of = [&](int pair) {
-      const uint16_t* p = &eighth_hits_[size_t(pair) * pair_block];
+    // (a slot's eighths of one direction node lie together: the four
+    // nodes' 64 each are all a box reads)
+    constexpr int kEighths = kEighth * kEighth;
+    const size_t slot_block = size_t(kThetaBins) * kPhiBins * kEighths;
+    std::array<size_t, 4> at;
+    for (int q = 0; q < 4; ++q) at[size_t(q)] = size_t(dw.node[size_t(q)]) * kEighths;
+    const auto hit_of = [&](int slot, int sub) {
+      const uint16_t* p = &eighth_hits_[size_t(slot) * slot_block + size_t(sub)];
       float h = 0;
-      for (int q = 0; q < 4; ++q) h += dw.w[size_t(q)] * from_bf16(p[dw.node[size_t(q)]]);
+      for (int q = 0; q < 4; ++q) h += dw.w[size_t(q)] * from_bf16(p[at[size_t(q)]]);
       return double(std::clamp(h, 0.0f, 1.0f));
     };
     return sum_hits<kEighth>(g, box.ex, box.ey, hit_of, slot_hits);
@@ -884,8 +898,8 @@ float FootprintTable::p_delta_sub(const KnitSurface& surface, const SubBox& box,
   const size_t pair_block = size_t(kThetaBins) * kPhiBins * stride;
   std::array<size_t, 4> at;
   for (int q = 0; q < 4; ++q) at[size_t(q)] = size_t(dw.node[size_t(q)]) * stride + kHit;
-  const auto hit_of = [&](int pair) {
-    const uint16_t* p = &sub_moments_[size_t(pair) * pair_block];
+  const auto hit_of = [&](int slot, int sub) {
+    const uint16_t* p = &sub_moments_[size_t(slot * kSub * kSub + sub) * pair_block];
     float h = 0;
     for (int q = 0; q < 4; ++q) h += dw.w[size_t(q)] * from_bf16(p[at[size_t(q)]]);
     return double(std::clamp(h, 0.0f, 1.0f));
@@ -938,7 +952,7 @@ float FootprintTable::sum_hits(const k::KnitGeom& g, const SubBox::Range& rx, co
         if (!(wc[slot * S + a] > 0)) continue;
         double line = 0;
         for (int o = 0; o < S; ++o)
-          if (wo[o] > 0) line += wo[o] * hit_of(slot * S * S + (by_column ? o * S + a : a * S + o));
+          if (wo[o] > 0) line += wo[o] * hit_of(slot, by_column ? o * S + a : a * S + o);
         sh += wc[slot * S + a] * line;
       }
       by_slot[size_t(slot)] = sh;
@@ -947,7 +961,7 @@ float FootprintTable::sum_hits(const k::KnitGeom& g, const SubBox::Range& rx, co
   } else {
     for_each_sub<S>(g, rx, ry, [&](int, int, size_t cell, int sub, double w) {
       const int slot = slot_[class_of_[cell]];
-      const double wh = w * hit_of(slot * S * S + sub);
+      const double wh = w * hit_of(slot, sub);
       total += w;
       hits += wh;
       by_slot[size_t(slot)] += wh;

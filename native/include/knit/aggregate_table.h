@@ -290,7 +290,7 @@ class FootprintTable {
   template <int S = kSub, class Visit>
   static void for_each_sub(const k::KnitGeom& g, const SubBox::Range& rx, const SubBox::Range& ry, Visit&& visit);
   // p_delta_sub's sum over the box's ranges rx, ry of S sub-cells a cell,
-  // hit_of(slot * S * S + sub-cell) the hit fraction of a (slot, sub-cell)
+  // hit_of(slot, sub-cell) the hit fraction of a (slot, sub-cell)
   // pair in the direction at hand.
   template <int S, class HitOf>
   float sum_hits(const k::KnitGeom& g, const SubBox::Range& rx, const SubBox::Range& ry, HitOf&& hit_of,
@@ -332,8 +332,9 @@ class FootprintTable {
   // (8 significant bits, 0.4% at most, far below the statistics' sampling
   // error of several percent), read back by a shift.
   std::vector<uint16_t> sub_moments_;
-  // [slot][eighth][theta][phi]: the hit fraction per eighth of a cell on a
-  // side (sy * kEighth + sx), as bfloat16; empty without sub-cells.
+  // [slot][theta][phi][eighth]: the hit fraction per eighth of a cell on a
+  // side (sy * kEighth + sx), as bfloat16 (a lookup reads the 64 of each
+  // of its four direction nodes together); empty without sub-cells.
   std::vector<uint16_t> eighth_hits_;
   std::vector<unsigned char> class_of_;  // class of each pattern cell, by knit_cell_index
   bool one_colour_ = true;               // every cell has colour index 0
