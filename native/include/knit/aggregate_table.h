@@ -291,10 +291,12 @@ class FootprintTable {
   static void for_each_sub(const k::KnitGeom& g, const SubBox::Range& rx, const SubBox::Range& ry, Visit&& visit);
   // p_delta_sub's sum over the box's ranges rx, ry of S sub-cells a cell,
   // hit_of(slot, sub-cell) the hit fraction of a (slot, sub-cell)
-  // pair in the direction at hand.
-  template <int S, class HitOf>
+  // pair in the direction at hand; where the box folds onto one cell per
+  // class, cell_sum(slot, wx, wy) the sum over the cell's sub-cells of
+  // wy[row] wx[column] times their hit fraction.
+  template <int S, class HitOf, class CellSum>
   float sum_hits(const k::KnitGeom& g, const SubBox::Range& rx, const SubBox::Range& ry, HitOf&& hit_of,
-                 float* slot_hits) const;
+                 CellSum&& cell_sum, float* slot_hits) const;
   // Fills a from `points`, the box's p_delta, its summed moments `sum`
   // (kLinear floats) and tangent sum `tsum`: the hit count, and the
   // hit-weighted means (normal, tangent, height at (x, y), slope covariance,
