@@ -182,8 +182,9 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
     return &sub_f[((slot * kSubCells + size_t(si)) * kThetaBins * kPhiBins + size_t(node)) * kMoments];
   };
   constexpr int kEighths = kEighth * kEighth;
-  // (64 rays or more: the net's first 64 points put one in every eighth)
-  const bool keep_eighths = sub_cells && eighths && rays_per_direction >= kEighths;
+  // (rays a multiple of 64: a direction's rays then start at a multiple of
+  // 64 in the net, and each run of 64 puts one in every eighth)
+  const bool keep_eighths = sub_cells && eighths && rays_per_direction % kEighths == 0;
   std::vector<float> eighth_f(keep_eighths ? size_t(slots) * kEighths * kThetaBins * kPhiBins : 0, 0.0f);
   const int m_rays = std::max(1, rays_per_direction);
   // The layer counts under the hits: a quarter of the build in scalar
@@ -334,12 +335,12 @@ FootprintTable::FootprintTable(const KnitSurface& surface, const CapmOptions& ca
       for (int ip = 0; ip < kPhiBins; ++ip) avg += row[ip] / kPhiBins;
       std::fill_n(row, kPhiBins, avg);
     }
-  // (stored [slot][node][eighth]: a lookup reads one direction's eighths)
-  const size_t dirs = size_t(kThetaBins) * kPhiBins;
+  // (stored by direction node, eighth_index: a lookup reads one direction's eighths)
   eighth_hits_.resize(eighth_f.size());
   for (size_t i = 0; i < eighth_f.size(); ++i) {
-    const size_t slot = i / (kEighths * dirs), ei = i / dirs % kEighths, node = i % dirs;
-    eighth_hits_[(slot * dirs + node) * kEighths + ei] = to_bf16(eighth_f[i]);
+    const size_t dirs = size_t(kThetaBins) * kPhiBins;
+    eighth_hits_[eighth_index(int(i / (kEighths * dirs)), int(i % dirs), int(i / dirs % kEighths))] =
+        to_bf16(eighth_f[i]);
   }
   if (one_colour_) {
     static_assert(kSubLinear1 == kNear + 1 && kSubStride1 >= kSubLinear1 + 3, "the one-colour sub-cell node");
@@ -369,12 +370,12 @@ std::vector<float> FootprintTable::sub_moments() const {
 }
 
 std::vector<float> FootprintTable::eighth_hits() const {
-  constexpr size_t kEighths = kEighth * kEighth, nodes = size_t(kThetaBins) * kPhiBins;
-  std::vector<float> out(eighth_hits_.size());
-  for (size_t i = 0; i < out.size(); ++i) {  // (stored [slot][node][eighth])
-    const size_t slot = i / (kEighths * nodes), ei = i / nodes % kEighths, node = i % nodes;
-    out[i] = from_bf16(eighth_hits_[(slot * nodes + node) * kEighths + ei]);
-  }
+  constexpr int kEighths = kEighth * kEighth, kNodes = kThetaBins * kPhiBins;
+  std::vector<float> out;
+  out.reserve(eighth_hits_.size());
+  for (int slot = 0; slot < int(eighth_hits_.size() / (kEighths * kNodes)); ++slot)
+    for (int e = 0; e < kEighths; ++e)
+      for (int node = 0; node < kNodes; ++node) out.push_back(from_bf16(eighth_hits_[eighth_index(slot, node, e)]));
   return out;
 }
 
@@ -695,9 +696,9 @@ std::optional<FootprintTable::SubBox> FootprintTable::sub_box_at(float x, float 
   box.x_ = x;
   box.y_ = y;
   if (count(box.rx, box.ry) > kMaxSubBox) return std::nullopt;
-  box.ex = eighths(box.rx);
-  box.ey = eighths(box.ry);
-  box.eighths_ = count(box.ex, box.ey) <= kMaxEighthBox;
+  box.rx8 = eighths(box.rx);
+  box.ry8 = eighths(box.ry);
+  box.eighths_ = count(box.rx8, box.ry8) <= kMaxEighthBox;
   return box;
 }
 
@@ -903,12 +904,10 @@ float FootprintTable::p_delta_sub(const KnitSurface& surface, const SubBox& box,
   if (box.eighths_ && has_eighths()) {
     // (a slot's eighths of one direction node lie together: the four
     // nodes' 64 each are all a box reads)
-    constexpr int kEighths = kEighth * kEighth;
-    const size_t slot_block = size_t(kThetaBins) * kPhiBins * kEighths;
-    std::array<size_t, 4> at;
-    for (int q = 0; q < 4; ++q) at[size_t(q)] = size_t(dw.node[size_t(q)]) * kEighths;
+    std::array<size_t, 4> at;  // the four nodes' offsets from node 0
+    for (int q = 0; q < 4; ++q) at[size_t(q)] = eighth_index(0, dw.node[size_t(q)], 0);
     const auto hit_of = [&](int slot, int sub) {
-      const uint16_t* p = &eighth_hits_[size_t(slot) * slot_block + size_t(sub)];
+      const uint16_t* p = &eighth_hits_[eighth_index(slot, 0, sub)];
       float h = 0;
       for (int q = 0; q < 4; ++q) h += dw.w[size_t(q)] * from_bf16(p[at[size_t(q)]]);
       return double(std::clamp(h, 0.0f, 1.0f));
@@ -923,7 +922,7 @@ float FootprintTable::p_delta_sub(const KnitSurface& surface, const SubBox& box,
     const auto cell_sum = [&](int slot, const double* wx, const double* wy) {
       const v4 we = {float(wx[0]), float(wx[2]), float(wx[4]), float(wx[6])};
       const v4 wo = {float(wx[1]), float(wx[3]), float(wx[5]), float(wx[7])};
-      const uint16_t* base = &eighth_hits_[size_t(slot) * slot_block];
+      const uint16_t* base = &eighth_hits_[eighth_index(slot, 0, 0)];
       const v4 zero = {0, 0, 0, 0}, one = {1, 1, 1, 1};
       double sum = 0;
       for (int y = 0; y < kEighth; ++y) {
@@ -949,7 +948,7 @@ float FootprintTable::p_delta_sub(const KnitSurface& surface, const SubBox& box,
 #else
     const auto cell_sum = cells_of<kEighth>(hit_of);
 #endif
-    return sum_hits<kEighth>(g, box.ex, box.ey, hit_of, cell_sum, slot_hits);
+    return sum_hits<kEighth>(g, box.rx8, box.ry8, hit_of, cell_sum, slot_hits);
   }
   // the four nodes' offsets within a pair's block
   const size_t stride = one_colour_ ? size_t(kSubStride1) : size_t(kMoments);

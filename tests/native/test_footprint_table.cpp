@@ -934,9 +934,12 @@ TEST(FootprintTable, WholeCellsAreTheMeanOfTheirSubCells) {
               worst_e, spread_e, both);
   EXPECT_LT(worst_e, 2.0 / 512 + 1e-6);
   EXPECT_GT(spread_e, 0.4);
-  // Without eighths (or with too few rays to put one in each): none kept.
+  // Without eighths, or with rays that do not put one in each (fewer than
+  // 64 a direction, or not a multiple of 64: a direction's run of the net
+  // then starts off a multiple of 64): none kept.
   EXPECT_FALSE(FootprintTable(s, CapmOptions{}, 64, FootprintTable::LayerCounts::Auto, true, false).has_eighths());
   EXPECT_FALSE(FootprintTable(s, CapmOptions{}, 32).has_eighths());
+  EXPECT_FALSE(FootprintTable(s, CapmOptions{}, 100).has_eighths());
 }
 
 // Which footprints the material reads from the sub-cells: at least

@@ -150,7 +150,7 @@ class FootprintTable {
       double overlap(int64_t i) const { return std::min(hi, double(i + 1)) - std::max(lo, double(i)); }
     };
     Range rx{}, ry{};
-    Range ex{}, ey{};       // the same box in eighths of a cell
+    Range rx8{}, ry8{};     // the same box in eighths of a cell
     bool eighths_ = false;  // it touches at most kMaxEighthBox of them
     float x_ = 0, y_ = 0;
   };
@@ -260,6 +260,11 @@ class FootprintTable {
   }
   // The stored node `node` of (class slot, sub-cell) pair `pair` (slot *
   // kSub^2 + sub-cell), and a stored value read back as a float.
+  // Where eighth_hits_ keeps the hit fraction of (class slot, direction
+  // node, eighth).
+  static size_t eighth_index(int slot, int node, int eighth) {
+    return (size_t(slot) * kThetaBins * kPhiBins + size_t(node)) * kEighth * kEighth + size_t(eighth);
+  }
   const uint16_t* sub_node_at(int pair, int node) const {
     const size_t stride = one_colour_ ? size_t(kSubStride1) : size_t(kMoments);
     return &sub_moments_[(size_t(pair) * kThetaBins * kPhiBins + size_t(node)) * stride];
