@@ -9,6 +9,7 @@ void differentials_pass_through(const RayDifferential& in, const SurfaceInteract
   out.diff_scale = in.diff_scale;
   out.pixel_dx = in.pixel_dx;
   out.pixel_dy = in.pixel_dy;
+  out.footprint_memo = in.footprint_memo;
   if (!out.has_differentials) return;
   out.rx_o = si.p + si.footprint.dpdx;
   out.ry_o = si.p + si.footprint.dpdy;
@@ -27,6 +28,7 @@ void differentials_specular(const RayDifferential& in, const SurfaceInteraction&
   out.diff_scale = in.diff_scale;
   out.pixel_dx = in.pixel_dx;
   out.pixel_dy = in.pixel_dy;
+  out.footprint_memo = in.footprint_memo;
   if (!out.has_differentials) return;
   const Footprint& f = si.footprint;
   const Vec3 wo = -in.d;

@@ -25,6 +25,7 @@ struct PathStats {
   uint64_t shell_bounces = 0;   // bounces that met yarn again inside the same shell (no scene ray)
   uint64_t table_resolves = 0;  // resolves the knit model read from its multi-scale class table
   uint64_t sub_cell_resolves = 0;  // ... of which from its sub-cells
+  uint64_t sub_boxes_reused = 0;   // ... of which took their box from the pixel's knit::FootprintMemo
   uint64_t quarter_cell_resolves = 0;  // multi-scale near-field resolves of a quarter cell or more (KnitShade::quarter_cell)
   uint64_t aggregate_resolves = 0;  // resolves the knit model aggregated over marched footprint points
   uint64_t marches_spared = 0;  // light samples from inside a yarn shell that an opaque object blocked
@@ -42,6 +43,7 @@ struct PathStats {
     shell_bounces += o.shell_bounces;
     table_resolves += o.table_resolves;
     sub_cell_resolves += o.sub_cell_resolves;
+    sub_boxes_reused += o.sub_boxes_reused;
     quarter_cell_resolves += o.quarter_cell_resolves;
     aggregate_resolves += o.aggregate_resolves;
     marches_spared += o.marches_spared;

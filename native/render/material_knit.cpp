@@ -170,7 +170,9 @@ PassThrough KnitModelMaterial::resolve(SurfaceInteraction& si, const RayDifferen
   PassThrough pt;
   knit::BaseHit hit = base_hit(si, ray.diff_scale, {ray.pixel_dx, ray.pixel_dy});
   const knit::KnitMaterial& model = cone_footprint(si, ray.d, hit) ? *model_ : model_for(hit);
-  const knit::KnitMaterial::HitRoute route = model.route_of(hit);  // (once for the shift and the shading)
+  // (once for the shift and the shading; with the pixel's memo where the
+  // footprint is the pixel's)
+  const knit::KnitMaterial::HitRoute route = model.route_of(hit, centre_at_pixel_ ? ray.footprint_memo : nullptr);
   const Vec2 shift = footprint_shift(model, route, sampler);
   // With the tabulated BSDF, one number serves the pass through the gaps
   // and, past it, the pick of the mix's view nodes (KnitMaterial::shade).

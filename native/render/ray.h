@@ -7,6 +7,10 @@
 
 #include "render/vec.h"
 
+namespace knit {
+class FootprintMemo;
+}
+
 namespace knit::render {
 
 struct Ray {
@@ -27,6 +31,10 @@ struct RayDifferential : Ray {
   // differentials: the knit model centres a multi-scale footprint at the
   // pixel's centre (KnitDesc::footprint_centre).
   float pixel_dx = 0, pixel_dy = 0;
+  // The pixel's memo of its multi-scale footprint boxes (the camera
+  // samples of one pixel share them; knit::FootprintMemo), kept with
+  // pixel_dx and pixel_dy; null past a bounce.
+  knit::FootprintMemo* footprint_memo = nullptr;
   // Past a non-specular bounce, where there are no differentials: the width
   // one pixel's footprint has at ray distance t is about
   // cone_width + t cone_spread (world units), as for a camera ray of the

@@ -159,6 +159,7 @@ RenderJobResult run_render_job(const RenderJob& job, const std::function<void(co
   rep.marches_spared = r.stats.marches_spared;
   rep.table_resolves = r.stats.table_resolves;
   rep.sub_cell_resolves = r.stats.sub_cell_resolves;
+  rep.sub_boxes_reused = r.stats.sub_boxes_reused;
   rep.quarter_cell_resolves = r.stats.quarter_cell_resolves;
   rep.aggregate_resolves = r.stats.aggregate_resolves;
   rep.triangles = scene.stats().triangles;

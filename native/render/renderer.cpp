@@ -11,6 +11,7 @@
 #include <mutex>
 #include <numeric>
 
+#include "knit/shading.h"
 #include "render/camera.h"
 #include "render/rng.h"
 
@@ -42,12 +43,14 @@ RenderResult render_image(const Scene& scene, const RenderSettings& settings) {
       for (int x = x0; x < x1; ++x) {
         const uint64_t pixel = static_cast<uint64_t>(y) * static_cast<uint64_t>(w) + static_cast<uint64_t>(x);
         double sr = 0, sg = 0, sb = 0;
+        knit::FootprintMemo memo;  // the pixel's multi-scale boxes, shared by its samples
         for (int s = 0; s < spp; ++s) {
           Sampler sampler(settings.seed, pixel, static_cast<uint64_t>(s), static_cast<uint32_t>(spp));
           const Vec2 j = sampler.get2d();
           RayDifferential ray = camera.generate(static_cast<float>(x) + j.x, static_cast<float>(y) + j.y, diff_scale);
           ray.pixel_dx = j.x - 0.5f;
           ray.pixel_dy = j.y - 0.5f;
+          ray.footprint_memo = &memo;
           Rgb l;
           if (settings.mask_material >= 0) {
             ++stats.camera_rays;
@@ -69,6 +72,7 @@ RenderResult render_image(const Scene& scene, const RenderSettings& settings) {
           sg += l.g;
           sb += l.b;
         }
+        stats.sub_boxes_reused += uint64_t(memo.reused());
         const double inv = 1.0 / spp;
         result.image.at(x, y) = Rgb(static_cast<float>(sr * inv), static_cast<float>(sg * inv), static_cast<float>(sb * inv));
       }

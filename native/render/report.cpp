@@ -171,7 +171,8 @@ std::string RenderReport::to_json() const {
   j["knit"] = {{"materials", knit_materials}, {"explicit_yarns", explicit_yarns},
                {"hits", resolves}, {"hits_passed", resolve_passes}, {"shadow_crossings", shadow_resolves},
                {"shell_bounces", shell_bounces}, {"table_hits", table_resolves},
-               {"sub_cell_hits", sub_cell_resolves}, {"quarter_cell_near_field_hits", quarter_cell_resolves},
+               {"sub_cell_hits", sub_cell_resolves}, {"sub_cell_boxes_reused", sub_boxes_reused},
+               {"quarter_cell_near_field_hits", quarter_cell_resolves},
                {"aggregated_hits", aggregate_resolves}, {"marches_spared", marches_spared},
                {"yarn_points", yarn_points}, {"yarn_segments", yarn_segments}, {"yarn_curves", yarn_curves},
                {"yarn_build_seconds", yarn_build_seconds}};

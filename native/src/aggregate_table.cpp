@@ -873,19 +873,24 @@ float FootprintTable::p_delta_sub(const KnitSurface& surface, float x, float y, 
 
 namespace {
 
+using D4 = std::array<double, 4>;  // a value at each of the four direction nodes
+
 // A folded cell's hits, sum_hits' cell_sum, one sub-cell at a time:
-// sum over rows y and columns x of S sub-cells of wy[y] wx[x]
-// hit_of(slot, y S + x).
-template <int S, class HitOf>
-auto cells_of(const HitOf& hit_of) {
-  return [&hit_of](int slot, const double* wx, const double* wy) {
-    double sum = 0;
+// sum over rows y (those set in `rows`) and columns x of S sub-cells of
+// wy[y] wx[x] hit4(slot, y S + x).
+template <int S, class Hit4>
+auto cells_of(const Hit4& hit4) {
+  return [&hit4](int slot, const double* wx, const double* wy, uint32_t rows) {
+    D4 sum{};
     for (int y = 0; y < S; ++y) {
-      if (!(wy[y] > 0)) continue;
-      double line = 0;
-      for (int x = 0; x < S; ++x)
-        if (wx[x] > 0) line += wx[x] * hit_of(slot, y * S + x);
-      sum += wy[y] * line;
+      if (!((rows >> y) & 1u)) continue;
+      D4 line{};
+      for (int x = 0; x < S; ++x) {
+        if (!(wx[x] > 0)) continue;
+        const D4 h = hit4(slot, y * S + x);
+        for (int q = 0; q < 4; ++q) line[size_t(q)] += wx[x] * h[size_t(q)];
+      }
+      for (int q = 0; q < 4; ++q) sum[size_t(q)] += wy[y] * line[size_t(q)];
     }
     return sum;
   };
@@ -894,40 +899,48 @@ auto cells_of(const HitOf& hit_of) {
 }  // namespace
 
 float FootprintTable::p_delta_sub(const KnitSurface& surface, const SubBox& box, Vec3 wi, float* slot_hits) const {
+  NodeSums sums;
+  return p_delta_sub(surface, box, wi, slot_hits, sums);
+}
+
+float FootprintTable::p_delta_sub(const KnitSurface& surface, const SubBox& box, Vec3 wi, float* slot_hits,
+                                  NodeSums& sums) const {
   check_sub_cells("p_delta_sub");
-  const k::KnitGeom& g = surface.geom();
-  // Each touched (class slot, sub-cell) pair's hit fraction in direction
-  // wi (bilinear over the four nodes around it, clamped, as aggregate_sub
-  // takes it) weighted by the box's overlap area on the pair: of eighths
-  // where the table keeps them and the box touches few enough.
   const DirWeights dw = dir_weights(wi);
+  if (sums.node == dw.node) return blend(sums, dw, slot_hits);
+  sums = NodeSums{};
+  sums.node = dw.node;
+  const k::KnitGeom& g = surface.geom();
+  // Each touched (class slot, sub-cell) pair's hit fraction at the four
+  // nodes around wi, weighted by the box's overlap area on the pair: of
+  // eighths where the table keeps them and the box touches few enough.
   if (box.eighths_ && has_eighths()) {
     // (a slot's eighths of one direction node lie together: the four
     // nodes' 64 each are all a box reads)
     std::array<size_t, 4> at;  // the four nodes' offsets from node 0
     for (int q = 0; q < 4; ++q) at[size_t(q)] = eighth_index(0, dw.node[size_t(q)], 0);
-    const auto hit_of = [&](int slot, int sub) {
+    const auto hit4 = [&](int slot, int sub) {
       const uint16_t* p = &eighth_hits_[eighth_index(slot, 0, sub)];
-      float h = 0;
-      for (int q = 0; q < 4; ++q) h += dw.w[size_t(q)] * from_bf16(p[at[size_t(q)]]);
-      return double(std::clamp(h, 0.0f, 1.0f));
+      D4 h;
+      for (int q = 0; q < 4; ++q) h[size_t(q)] = double(from_bf16(p[at[size_t(q)]]));
+      return h;
     };
 #if defined(__GNUC__)
     // A folded cell's sum a row of eight eighths at a time: a row's 8
     // bfloat16 values of a node are 16 bytes, read as four 32-bit lanes
-    // whose low halves are the even eighths and high halves the odd ones.
+    // whose low halves are the even eighths and high halves the odd ones,
+    // each row weighted by wy into two vectors a node (even and odd
+    // eighths); the columns' weights applied once at the end.
     typedef float v4 __attribute__((vector_size(16)));
     typedef uint32_t u4 __attribute__((vector_size(16)));
     static_assert(kEighth == 8, "a row is two vectors");
-    const auto cell_sum = [&](int slot, const double* wx, const double* wy) {
-      const v4 we = {float(wx[0]), float(wx[2]), float(wx[4]), float(wx[6])};
-      const v4 wo = {float(wx[1]), float(wx[3]), float(wx[5]), float(wx[7])};
+    const auto cell_sum = [&](int slot, const double* wx, const double* wy, uint32_t rows) {
       const uint16_t* base = &eighth_hits_[eighth_index(slot, 0, 0)];
-      const v4 zero = {0, 0, 0, 0}, one = {1, 1, 1, 1};
-      double sum = 0;
-      for (int y = 0; y < kEighth; ++y) {
-        if (!(wy[y] > 0)) continue;
-        v4 he = zero, ho = zero;
+      const v4 zero = {0, 0, 0, 0};
+      v4 ae[4] = {zero, zero, zero, zero}, ao[4] = {zero, zero, zero, zero};
+      for (; rows; rows &= rows - 1) {
+        const int y = __builtin_ctz(rows);
+        const float wr = float(wy[y]);
         for (int q = 0; q < 4; ++q) {
           u4 r;
           std::memcpy(&r, base + at[size_t(q)] + size_t(y) * kEighth, sizeof r);
@@ -935,40 +948,57 @@ float FootprintTable::p_delta_sub(const KnitSurface& surface, const SubBox& box,
           v4 fe, fo;
           std::memcpy(&fe, &even, sizeof fe);
           std::memcpy(&fo, &odd, sizeof fo);
-          he += dw.w[size_t(q)] * fe;
-          ho += dw.w[size_t(q)] * fo;
+          ae[q] += wr * fe;
+          ao[q] += wr * fo;
         }
-        he = he < zero ? zero : (he > one ? one : he);  // (clamped, as hit_of)
-        ho = ho < zero ? zero : (ho > one ? one : ho);
-        const v4 row = we * he + wo * ho;
-        sum += wy[y] * double((row[0] + row[1]) + (row[2] + row[3]));
+      }
+      const v4 we = {float(wx[0]), float(wx[2]), float(wx[4]), float(wx[6])};
+      const v4 wo = {float(wx[1]), float(wx[3]), float(wx[5]), float(wx[7])};
+      D4 sum;
+      for (int q = 0; q < 4; ++q) {
+        const v4 row = we * ae[q] + wo * ao[q];
+        sum[size_t(q)] = double((row[0] + row[1]) + (row[2] + row[3]));
       }
       return sum;
     };
 #else
-    const auto cell_sum = cells_of<kEighth>(hit_of);
+    const auto cell_sum = cells_of<kEighth>(hit4);
 #endif
-    return sum_hits<kEighth>(g, box.rx8, box.ry8, hit_of, cell_sum, slot_hits);
+    sum_hits<kEighth>(g, box.rx8, box.ry8, hit4, cell_sum, sums);
+  } else {
+    // the four nodes' offsets within a pair's block
+    const size_t stride = one_colour_ ? size_t(kSubStride1) : size_t(kMoments);
+    const size_t pair_block = size_t(kThetaBins) * kPhiBins * stride;
+    std::array<size_t, 4> at;
+    for (int q = 0; q < 4; ++q) at[size_t(q)] = size_t(dw.node[size_t(q)]) * stride + kHit;
+    const auto hit4 = [&](int slot, int sub) {
+      const uint16_t* p = &sub_moments_[size_t(slot * kSub * kSub + sub) * pair_block];
+      D4 h;
+      for (int q = 0; q < 4; ++q) h[size_t(q)] = double(from_bf16(p[at[size_t(q)]]));
+      return h;
+    };
+    sum_hits<kSub>(g, box.rx, box.ry, hit4, cells_of<kSub>(hit4), sums);
   }
-  // the four nodes' offsets within a pair's block
-  const size_t stride = one_colour_ ? size_t(kSubStride1) : size_t(kMoments);
-  const size_t pair_block = size_t(kThetaBins) * kPhiBins * stride;
-  std::array<size_t, 4> at;
-  for (int q = 0; q < 4; ++q) at[size_t(q)] = size_t(dw.node[size_t(q)]) * stride + kHit;
-  const auto hit_of = [&](int slot, int sub) {
-    const uint16_t* p = &sub_moments_[size_t(slot * kSub * kSub + sub) * pair_block];
-    float h = 0;
-    for (int q = 0; q < 4; ++q) h += dw.w[size_t(q)] * from_bf16(p[at[size_t(q)]]);
-    return double(std::clamp(h, 0.0f, 1.0f));
-  };
-  return sum_hits<kSub>(g, box.rx, box.ry, hit_of, cells_of<kSub>(hit_of), slot_hits);
+  return blend(sums, dw, slot_hits);
 }
 
-template <int S, class HitOf, class CellSum>
-float FootprintTable::sum_hits(const k::KnitGeom& g, const SubBox::Range& rx, const SubBox::Range& ry,
-                               HitOf&& hit_of, CellSum&& cell_sum, float* slot_hits) const {
-  std::array<double, kClasses> by_slot{};
-  double hits = 0, total = 0;
+float FootprintTable::blend(const NodeSums& sums, const DirWeights& dw, float* slot_hits) const {
+  if (!(sums.total > 0)) return 1;
+  const auto mixed = [&](const std::array<double, 4>& v) {
+    return (double(dw.w[0]) * v[0] + double(dw.w[1]) * v[1]) + (double(dw.w[2]) * v[2] + double(dw.w[3]) * v[3]);
+  };
+  const double inv = 1 / sums.total;
+  if (slot_hits)
+    for (int s = 0; s < slots_; ++s) slot_hits[s] += float(mixed(sums.by_slot[size_t(s)]) * inv);
+  return std::clamp(float(1 - mixed(sums.hits) * inv), 0.0f, 1.0f);
+}
+
+template <int S, class Hit4, class CellSum>
+void FootprintTable::sum_hits(const k::KnitGeom& g, const SubBox::Range& rx, const SubBox::Range& ry,
+                              Hit4&& hit4, CellSum&& cell_sum, NodeSums& sums) const {
+  const auto add = [](D4& to, const D4& v) {
+    for (int q = 0; q < 4; ++q) to[size_t(q)] += v[size_t(q)];
+  };
   if (period_rows_ == 1 || period_cols_ == 1) {
     // Classes that change along one axis only (one class, ribs, welts): a
     // sub-cell's area is its column's overlap times its row's, and its pair
@@ -976,20 +1006,33 @@ float FootprintTable::sum_hits(const k::KnitGeom& g, const SubBox::Range& rx, co
     // places of one cell per class met along that axis (at most S * S
     // pairs a class, however long the box).
     const bool by_column = period_rows_ == 1;  // (else every column is alike)
-    const auto fold = [&](const SubBox::Range& r, bool classes, double* w, bool* met) {
+    // fold: the overlaps of range r summed onto the S places of a cell, per
+    // class slot met along the classes' axis (else all in slot 0), and
+    // which places got any (bits of `places`).
+    const auto fold = [&](const SubBox::Range& r, bool classes, double* w, uint32_t* places) {
       double sum = 0;
-      for (int64_t i = r.first; i <= r.last; ++i) {
+      const int n = by_column ? g.cols : g.rows;
+      int64_t cell = floor_div(r.first, S);
+      int place = int(r.first - cell * S);
+      // (class_of_ as knit_cell_index has it: along a row, or down a column;
+      // the cell's index wrapped by hand, no division per sub-cell)
+      int m = classes ? k::k_modi(int(cell), n) : 0;
+      const auto slot_at = [&](int mm) {
+        return slot_[class_of_[by_column ? size_t(mm) : size_t(g.rows - 1 - mm) * size_t(g.cols)]];
+      };
+      int slot = classes ? slot_at(m) : 0;
+      for (int64_t i = r.first; i <= r.last; ++i, ++place) {
+        if (place == S) {
+          place = 0;
+          if (classes) {
+            if (++m == n) m = 0;
+            slot = slot_at(m);
+          }
+        }
         const double v = r.overlap(i);
         if (!(v > 0)) continue;
-        const int64_t cell = floor_div(i, S);
-        int slot = 0;
-        if (classes) {
-          // (class_of_ as knit_cell_index has it: along a row, or down a column)
-          const int m = k::k_modi(int(cell), by_column ? g.cols : g.rows);
-          slot = slot_[class_of_[by_column ? size_t(m) : size_t(g.rows - 1 - m) * size_t(g.cols)]];
-        }
-        met[slot] = true;
-        w[slot * S + int(i - cell * S)] += v;
+        places[slot] |= 1u << place;
+        w[slot * S + place] += v;
         sum += v;
       }
       return sum;
@@ -997,31 +1040,29 @@ float FootprintTable::sum_hits(const k::KnitGeom& g, const SubBox::Range& rx, co
     // (only the slots present cleared: a memset of the whole arrays cost
     // more than the fold)
     double wc[kClasses * S], wo[S];  // along the classes' axis, along the other
-    bool met[kClasses], unused = false;
+    uint32_t met[kClasses], other = 0;
+    static_assert(S <= 32, "a cell's places are bits of a word");
     std::fill_n(wc, slots_ * S, 0.0);
     std::fill_n(wo, S, 0.0);
-    std::fill_n(met, slots_, false);
-    total = fold(by_column ? rx : ry, true, wc, met) * fold(by_column ? ry : rx, false, wo, &unused);
+    std::fill_n(met, slots_, 0u);
+    sums.total = fold(by_column ? rx : ry, true, wc, met) * fold(by_column ? ry : rx, false, wo, &other);
     for (int slot = 0; slot < slots_; ++slot) {
       if (!met[slot]) continue;
       const double* along = wc + slot * S;
-      const double sh = by_column ? cell_sum(slot, along, wo) : cell_sum(slot, wo, along);
-      by_slot[size_t(slot)] = sh;
-      hits += sh;
+      const D4 sh = by_column ? cell_sum(slot, along, wo, other) : cell_sum(slot, wo, along, met[slot]);
+      sums.by_slot[size_t(slot)] = sh;
+      add(sums.hits, sh);
     }
   } else {
     for_each_sub<S>(g, rx, ry, [&](int, int, size_t cell, int sub, double w) {
       const int slot = slot_[class_of_[cell]];
-      const double wh = w * hit_of(slot, sub);
-      total += w;
-      hits += wh;
-      by_slot[size_t(slot)] += wh;
+      const D4 h = hit4(slot, sub);
+      D4& by = sums.by_slot[size_t(slot)];
+      for (int q = 0; q < 4; ++q) by[size_t(q)] += w * h[size_t(q)];
+      sums.total += w;
     });
+    for (int slot = 0; slot < slots_; ++slot) add(sums.hits, sums.by_slot[size_t(slot)]);
   }
-  if (!(total > 0)) return 1;
-  if (slot_hits)
-    for (int s = 0; s < slots_; ++s) slot_hits[s] += float(by_slot[size_t(s)] / total);
-  return std::clamp(float(1 - hits / total), 0.0f, 1.0f);
 }
 
 FootprintTable::SubAreas FootprintTable::sub_areas(const k::KnitGeom& g, const SubBox& box) const {

@@ -314,14 +314,44 @@ void KnitMaterial::set_colors(KnitShade& sh, int color_index) const {
 }
 
 KnitMaterial::Route KnitMaterial::route(const BaseHit& hit, Vec3& fx, Vec3& fy, Vec3& e,
-                                        std::optional<FootprintTable::SubBox>* sub) const {
+                                        std::optional<FootprintTable::SubBox>* sub, FootprintMemo* memo,
+                                        FootprintTable::NodeSums** sums) const {
   if (params_.mode != KnitMode::MultiScale) return Route::NearField;
   footprint_axes(hit, fx, fy);
   e = k::knit_footprint_extent(surface_.geom(), fx, fy);
   // A cell or more in both directions (knit_footprint_stratified's test).
   if (e.x >= 1.0f && e.y >= 1.0f) return table_ ? Route::Cells : Route::Marched;
   const Vec3 c = footprint_centre(hit);
+  if (memo && sub && sums && table_ && table_->has_sub_cells() && e.x >= params_.table_min_cells &&
+      e.y >= params_.table_min_cells) {
+    // A box kept for this pixel that agrees with the hit's own (same
+    // material, centre and extent within kTolerance of its extent).
+    const float tol = FootprintMemo::kTolerance;
+    const float cw = K_2PI, ch = surface_.geom().row_spacing;
+    for (FootprintMemo::Entry& m : memo->entries_)
+      if (m.material == this && std::fabs(c.x - m.x) <= tol * m.ex * cw && std::fabs(c.y - m.y) <= tol * m.ey * ch &&
+          std::fabs(e.x - m.ex) <= tol * m.ex && std::fabs(e.y - m.ey) <= tol * m.ey) {
+        *sub = m.box;
+        *sums = &m.sums;
+        ++memo->reused_;
+        return Route::SubCells;
+      }
+  }
   if (std::optional<FootprintTable::SubBox> box = sub_cells_serve(c.x, c.y, e)) {
+    if (memo && sub && sums) {
+      // Kept in place of the older of the two.
+      FootprintMemo::Entry& m = memo->entries_[size_t(memo->next_)];
+      memo->next_ = 1 - memo->next_;
+      m.material = this;
+      m.x = c.x;
+      m.y = c.y;
+      m.ex = e.x;
+      m.ey = e.y;
+      m.box = box;
+      m.sums = FootprintTable::NodeSums{};
+      *sums = &m.sums;
+      ++memo->found_;
+    }
     if (sub) *sub = box;
     return Route::SubCells;
   }
@@ -345,9 +375,9 @@ bool KnitMaterial::near_field_at(const BaseHit& hit) const {
   return route(hit, fx, fy, e) == Route::NearField;
 }
 
-KnitMaterial::HitRoute KnitMaterial::route_of(const BaseHit& hit) const {
+KnitMaterial::HitRoute KnitMaterial::route_of(const BaseHit& hit, FootprintMemo* memo) const {
   HitRoute r;
-  r.route = int(route(hit, r.fx, r.fy, r.e, &r.box));
+  r.route = int(route(hit, r.fx, r.fy, r.e, &r.box, memo, &r.sums));
   return r;
 }
 
@@ -397,7 +427,8 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, const HitRoute& r, Vec3 ray_di
     std::array<float, FootprintTable::kClasses> slot_hits{};
     float p;
     if (rt == Route::SubCells) {
-      p = table_->p_delta_sub(surface_, *box, wi, slot_hits.data());
+      p = r.sums ? table_->p_delta_sub(surface_, *box, wi, slot_hits.data(), *r.sums)
+                 : table_->p_delta_sub(surface_, *box, wi, slot_hits.data());
       sh.from_sub_cells = true;
     } else {
       const k::KFootprint f =

@@ -252,6 +252,94 @@ TEST(Shading, MultiScaleShowsColourIndicesPastEight) {
   for (int c = 0; c < 10; ++c) EXPECT_GT(seen[size_t(c)], 0) << "colour " << c << " never shown";
 }
 
+// FootprintMemo: the camera samples of one pixel find the pixel's box again
+// from their own hits, to within their differentials' rounding; with the
+// pixel's memo the later ones take the first one's box and its sums. What
+// they get must be what the first sample's box gives in their own
+// direction (to float rounding, whether or not their direction needs new
+// sums), and within the memo's tolerance of their own box's; a box further
+// off, or of another material, must be found anew. Rib (a folded box) and
+// seed (sub-cell by sub-cell), in eighths and, past 64 eighths, quarters.
+TEST(Shading, PixelMemoGivesItsSamplesTheFirstSamplesBox) {
+  KnitMaterialParams mp = flat_params();
+  mp.mode = KnitMode::MultiScale;
+  const KnitMaterial rib(rib_1x1(), mp), sd(seed(), mp), other(rib_1x1(), mp);
+  struct Case {
+    const char* name;
+    const KnitMaterial& m;
+    float cells;  // the box's extent
+  };
+  for (const Case& cs : {Case{"rib_1x1", rib, 0.37f}, Case{"seed", sd, 0.41f}, Case{"rib_1x1 quarters", rib, 0.93f},
+                         Case{"seed quarters", sd, 0.93f}}) {
+    const KnitMaterial& m = cs.m;
+    ASSERT_TRUE(m.footprint_table() && m.table_bsdf());
+    const float cw = K_2PI, ch = m.surface().geom().row_spacing;
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> U(-1, 1);
+    // A pixel's hits: the centre and the footprint's derivatives within
+    // `jitter` of its extent (the renderer's samples show 1e-4 to 1e-3 of
+    // the derivatives where the view is steep, a few hundredths where it
+    // grazes), the directions over 12 degrees (some cross into other
+    // direction nodes). (The centre lies mid-eighth at every edge: a box
+    // of 0.93 cells stays in quarters.)
+    const auto sample_hit = [&](float jitter) {
+      BaseHit bh;
+      bh.u = 37.5f * cw + jitter * cs.cells * cw * U(rng);
+      bh.v = 11.5f * ch + jitter * cs.cells * ch * U(rng);
+      bh.dudx = cs.cells * cw * (1 + jitter * U(rng));
+      bh.dvdy = cs.cells * ch * (1 + jitter * U(rng));
+      return bh;
+    };
+    const auto direction = [&]() {
+      const float th = 0.6f + 0.1f * U(rng), ph = 0.8f + 0.1f * U(rng);
+      return k::kv3(-std::sin(th) * std::cos(ph), -std::sin(th) * std::sin(ph), -std::cos(th));
+    };
+    const float tol = FootprintMemo::kTolerance;
+    for (const float jitter : {2e-4f, 0.9f * tol}) {
+      FootprintMemo memo;
+      const BaseHit first = sample_hit(0);  // (the others within `jitter` of it)
+      double worst_first = 0, worst_own = 0;
+      const int n = 40;
+      for (int i = 0; i < n; ++i) {
+        const BaseHit bh = i == 0 ? first : sample_hit(jitter);
+        const Vec3 d = direction();
+        const KnitShade with = m.shade(bh, m.route_of(bh, &memo), d, nullptr);
+        const KnitShade of_first = m.shade(first, d, nullptr);
+        const KnitShade own = m.shade(bh, d, nullptr);
+        ASSERT_TRUE(with.from_sub_cells && of_first.from_sub_cells) << cs.name;
+        ASSERT_EQ(with.table_bsdf != nullptr, of_first.table_bsdf != nullptr) << cs.name;
+        worst_first = std::max(worst_first, double(std::fabs(with.point.p_delta - of_first.point.p_delta)));
+        worst_own = std::max(worst_own, double(std::fabs(with.point.p_delta - own.point.p_delta)));
+        if (with.table_bsdf)
+          for (int sl = 0; sl < m.footprint_table()->classes_present(); ++sl)
+            EXPECT_NEAR(with.mix.share[size_t(sl)], of_first.mix.share[size_t(sl)], 2e-6f)
+                << cs.name << " sample " << i;
+      }
+      std::printf("[ memo ] %-16s jitter %.4f: p_delta against the first sample's box: worst %.1e; against the "
+                  "sample's own: %.1e\n",
+                  cs.name, jitter, worst_first, worst_own);
+      EXPECT_LT(worst_first, 2e-6) << cs.name;
+      // (a box moved by j of its extent changes its p_delta by at most
+      // about 2 j times the contrast of its edges, whose eighths differ by
+      // up to one)
+      EXPECT_LT(worst_own, 2.5 * jitter) << cs.name;
+      EXPECT_EQ(memo.found(), 1) << cs.name;
+      EXPECT_EQ(memo.reused(), n - 1) << cs.name;
+      // Off by twice the tolerance: found, and its own.
+      BaseHit off = first;
+      off.u += 2 * tol * cs.cells * cw;
+      const Vec3 d = direction();
+      const KnitShade with = m.shade(off, m.route_of(off, &memo), d, nullptr);
+      EXPECT_NEAR(with.point.p_delta, m.shade(off, d, nullptr).point.p_delta, 2e-6f) << cs.name;
+      EXPECT_EQ(memo.found(), 2) << cs.name;
+      // The same box of another material: found too.
+      other.shade(first, other.route_of(first, &memo), d, nullptr);
+      EXPECT_EQ(memo.found(), 3) << cs.name;
+      EXPECT_EQ(memo.reused(), n - 1) << cs.name;
+    }
+  }
+}
+
 // Self-shadowing and bounces inside the shell (near field): from a yarn hit,
 // the path towards a light (or a sampled direction) either leaves the shell
 // or meets other yarn first. Checked against double-precision ray casts of the

@@ -755,7 +755,7 @@ TEST(KnitVsExplicit, SwatchCloseUpMultiScale) {
 // every footprint. Each sample's box spread over the pixel averaged the
 // pixel twice and added noise; one box per pixel makes the image closer to
 // explicit yarns with less noise (docs/multiscale.md, "A footprint per
-// pixel").
+// pixel"), and lets the pixel's samples share it ("One box a pixel, kept").
 TEST(KnitVsExplicit, SwatchFarQuarterCellsCentredAtPixels) {
   const int size = 96;
   const auto render = [&](int method, int seed) {  // 0: explicit, 1: pixel, 2: sample
@@ -775,6 +775,10 @@ TEST(KnitVsExplicit, SwatchFarQuarterCellsCentredAtPixels) {
     }
     const RenderResult r = render_desc(d, method == 0);
     if (method > 0) EXPECT_GT(r.stats.sub_cell_resolves, r.stats.resolves * 9 / 10) << "from the quarter cells";
+    // One box a pixel: its later camera samples take it from the pixel's
+    // memo (knit::FootprintMemo), which a box per sample never matches.
+    if (method == 1) EXPECT_GT(r.stats.sub_boxes_reused, r.stats.sub_cell_resolves * 8 / 10);
+    if (method == 2) EXPECT_EQ(r.stats.sub_boxes_reused, 0u);
     return r.image;
   };
   const RgbImage truth = render(0, 1);

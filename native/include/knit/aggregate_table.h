@@ -168,6 +168,23 @@ class FootprintTable {
   float p_delta_sub(const KnitSurface& surface, float x, float y, float ex, float ey, Vec3 wi_local,
                     float* slot_hits = nullptr) const;
   float p_delta_sub(const KnitSurface& surface, const SubBox& box, Vec3 wi_local, float* slot_hits = nullptr) const;
+  // A box's hits at the four direction nodes around a direction, before
+  // their bilinear weights: per node, the box's hits and each class
+  // slot's, as areas, over its area `total`. p_delta_sub is these blended
+  // by the direction's weights (the blend of four hit fractions is a
+  // fraction, so the sums are linear in the nodes' values). A renderer
+  // that reads one box in many directions close together (the camera
+  // samples of a pixel; FootprintMemo) keeps them: the overload below
+  // sums the box only when `sums` holds other nodes, and then keeps the
+  // new sums there. `sums` must belong to this table and this box.
+  struct NodeSums {
+    std::array<int32_t, 4> node{{-1, -1, -1, -1}};
+    std::array<double, 4> hits{};
+    std::array<std::array<double, 4>, kClasses> by_slot{};
+    double total = 0;
+  };
+  float p_delta_sub(const KnitSurface& surface, const SubBox& box, Vec3 wi_local, float* slot_hits,
+                    NodeSums& sums) const;
   // The per-sub-cell statistics (kMoments floats per class present,
   // sub-cell and direction node, as stored: rounded to bfloat16; the
   // neighbour shares zero for a pattern of one colour index), for tests.
@@ -294,14 +311,17 @@ class FootprintTable {
   // with the box's eighths' ranges).
   template <int S = kSub, class Visit>
   static void for_each_sub(const k::KnitGeom& g, const SubBox::Range& rx, const SubBox::Range& ry, Visit&& visit);
-  // p_delta_sub's sum over the box's ranges rx, ry of S sub-cells a cell,
-  // hit_of(slot, sub-cell) the hit fraction of a (slot, sub-cell)
-  // pair in the direction at hand; where the box folds onto one cell per
-  // class, cell_sum(slot, wx, wy) the sum over the cell's sub-cells of
-  // wy[row] wx[column] times their hit fraction.
-  template <int S, class HitOf, class CellSum>
-  float sum_hits(const k::KnitGeom& g, const SubBox::Range& rx, const SubBox::Range& ry, HitOf&& hit_of,
-                 CellSum&& cell_sum, float* slot_hits) const;
+  // The box's NodeSums over its ranges rx, ry of S sub-cells a cell:
+  // hit4(slot, sub-cell) the hit fractions of a (slot, sub-cell) pair at
+  // the four nodes; where the box folds onto one cell per class,
+  // cell_sum(slot, wx, wy, rows) the sum over the cell's sub-cells of
+  // wy[row] wx[column] times their four fractions, over the rows whose
+  // bits are set in `rows` (those with wy > 0).
+  template <int S, class Hit4, class CellSum>
+  void sum_hits(const k::KnitGeom& g, const SubBox::Range& rx, const SubBox::Range& ry, Hit4&& hit4,
+                CellSum&& cell_sum, NodeSums& sums) const;
+  // p_delta_sub's blend of `sums` by the direction's weights.
+  float blend(const NodeSums& sums, const DirWeights& dw, float* slot_hits) const;
   // Fills a from `points`, the box's p_delta, its summed moments `sum`
   // (kLinear floats) and tangent sum `tsum`: the hit count, and the
   // hit-weighted means (normal, tangent, height at (x, y), slope covariance,

@@ -117,6 +117,41 @@ struct KnitShade {
   Vec3 p_yarn{};
 };
 
+class KnitMaterial;
+
+// The multi-scale footprints of one pixel's camera samples. With the
+// footprint centred at the pixel (the renderer's footprint_centre "pixel",
+// BaseHit::box_du), every camera sample of a pixel finds the pixel's box
+// again from its own hit, to within the float rounding of its ray
+// differentials (about 1e-4 of the box's extent). A renderer that keeps
+// one memo per pixel and passes it to KnitMaterial::route_of lets the
+// later samples take the first one's box and its class-table sums
+// (FootprintTable::NodeSums, per direction node) instead of finding and
+// summing the box again: a box read from the sub-cells whose centre and
+// extent agree with a kept one's to kTolerance of its extent is that box.
+// It keeps two (a pixel may see the fabric twice, through a gap), per
+// material. Empty to start; never shared between threads or pixels.
+class FootprintMemo {
+ public:
+  static constexpr float kTolerance = 1.0f / 32;
+  // Boxes found (sub_box_at and, the first time a direction needs them,
+  // summed) and boxes taken from the memo.
+  int64_t found() const { return found_; }
+  int64_t reused() const { return reused_; }
+
+ private:
+  friend class KnitMaterial;
+  struct Entry {
+    const KnitMaterial* material = nullptr;
+    float x = 0, y = 0, ex = 0, ey = 0;  // centre (pattern units) and extent (cells)
+    std::optional<FootprintTable::SubBox> box;
+    FootprintTable::NodeSums sums;
+  };
+  std::array<Entry, 2> entries_;
+  int next_ = 0;
+  int64_t found_ = 0, reused_ = 0;
+};
+
 class KnitMaterial {
  public:
   KnitMaterial(Pattern pattern, KnitMaterialParams params);  // validates
@@ -148,8 +183,12 @@ class KnitMaterial {
     int route = 0;  // (a KnitMaterial::Route)
     Vec3 fx{}, fy{}, e{};
     std::optional<FootprintTable::SubBox> box;
+    FootprintTable::NodeSums* sums = nullptr;  // the box's sums kept in a FootprintMemo
   };
-  HitRoute route_of(const BaseHit& hit) const;
+  // `memo`: the pixel's FootprintMemo, for a camera sample's hit (or the
+  // same ray passed on through the fabric); the route then refers to it,
+  // and must be shaded before the memo is used again.
+  HitRoute route_of(const BaseHit& hit, FootprintMemo* memo = nullptr) const;
   KnitShade shade(const BaseHit& hit, const HitRoute& route, Vec3 ray_dir, const FrameProvider* frame,
                   std::array<float, 2> shift = {0.5f, 0.5f}, float u = -1) const;
 
@@ -258,8 +297,11 @@ class KnitMaterial {
     return k::kv3(params_.uv_scale * (hit.u + hit.box_du), params_.uv_scale * (hit.v + hit.box_dv), 0);
   }
   // For Route::SubCells, `sub` (when given) gets the footprint's box.
+  // With `memo` (and `sub`), a box kept there stands for the hit's own
+  // and `sums` gets its sums (FootprintMemo).
   Route route(const BaseHit& hit, Vec3& fx, Vec3& fy, Vec3& extent,
-              std::optional<FootprintTable::SubBox>* sub = nullptr) const;
+              std::optional<FootprintTable::SubBox>* sub = nullptr, FootprintMemo* memo = nullptr,
+              FootprintTable::NodeSums** sums = nullptr) const;
   // The box of the footprint of `extent` cells (below a cell in some
   // direction) at pattern point (x, y), when the class table's sub-cells
   // serve it.
