@@ -122,15 +122,16 @@ class KnitMaterial;
 // The multi-scale footprints of one pixel's camera samples. With the
 // footprint centred at the pixel (the renderer's footprint_centre "pixel",
 // BaseHit::box_du), every camera sample of a pixel finds the pixel's box
-// again from its own hit, to within the float rounding of its ray
-// differentials (about 1e-4 of the box's extent). A renderer that keeps
-// one memo per pixel and passes it to KnitMaterial::route_of lets the
-// later samples take the first one's box and its class-table sums
-// (FootprintTable::NodeSums, per direction node) instead of finding and
-// summing the box again: a box read from the sub-cells whose centre and
-// extent agree with a kept one's to kTolerance of its extent is that box.
-// It keeps two (a pixel may see the fabric twice, through a gap), per
-// material. Empty to start; never shared between threads or pixels.
+// again from its own hit, to first order: to 1e-4-1e-3 of the box's extent
+// where the view is steep, a few hundredths where it grazes. A renderer
+// that keeps one memo per pixel and passes it to KnitMaterial::route_of
+// lets the later samples take the first one's box and its class-table
+// sums (FootprintTable::NodeSums, per direction node) instead of finding
+// and summing the box again: a box read from the sub-cells whose centre
+// and extent agree with a kept one's to kTolerance of its extent is that
+// box (docs/multiscale.md, "One box a pixel, kept"). It keeps two (a pixel
+// may see the fabric twice, through a gap), of any materials. Empty to
+// start; never shared between threads or pixels.
 class FootprintMemo {
  public:
   static constexpr float kTolerance = 1.0f / 32;
