@@ -322,8 +322,7 @@ KnitMaterial::Route KnitMaterial::route(const BaseHit& hit, Vec3& fx, Vec3& fy, 
   // A cell or more in both directions (knit_footprint_stratified's test).
   if (e.x >= 1.0f && e.y >= 1.0f) return table_ ? Route::Cells : Route::Marched;
   const Vec3 c = footprint_centre(hit);
-  if (memo && sub && sums && table_ && table_->has_sub_cells() && e.x >= params_.table_min_cells &&
-      e.y >= params_.table_min_cells) {
+  if (memo && sub && sums && sub_cells_reach(e)) {
     // A box kept for this pixel that agrees with the hit's own (same
     // material, centre and extent within kTolerance of its extent).
     const float tol = FootprintMemo::kTolerance;
@@ -358,9 +357,12 @@ KnitMaterial::Route KnitMaterial::route(const BaseHit& hit, Vec3& fx, Vec3& fy, 
   return params_.near_field_below_cell ? Route::NearField : Route::Marched;
 }
 
+bool KnitMaterial::sub_cells_reach(Vec3 e) const {
+  return table_ && table_->has_sub_cells() && e.x >= params_.table_min_cells && e.y >= params_.table_min_cells;
+}
+
 std::optional<FootprintTable::SubBox> KnitMaterial::sub_cells_serve(float x, float y, Vec3 e) const {
-  if (!(table_ && table_->has_sub_cells() && e.x >= params_.table_min_cells && e.y >= params_.table_min_cells))
-    return std::nullopt;
+  if (!sub_cells_reach(e)) return std::nullopt;
   return FootprintTable::sub_box_at(x, y, e.x, e.y, surface_.geom());
 }
 

@@ -307,6 +307,9 @@ class KnitMaterial {
   // direction) at pattern point (x, y), when the class table's sub-cells
   // serve it.
   std::optional<FootprintTable::SubBox> sub_cells_serve(float x, float y, Vec3 extent) const;
+  // Whether a footprint of `extent` cells is large enough for the sub-cells
+  // (table_min_cells; the table has them): sub_cells_serve's first test.
+  bool sub_cells_reach(Vec3 extent) const;
   // Shades sh with the tabulated BSDF: the mix of the classes' hits
   // `slot_hits` seen from wi (colours already in sh; colour_w, the
   // footprint's shares of the palette's colours for a folded table, null
