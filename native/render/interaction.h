@@ -13,7 +13,7 @@ namespace knit::render {
 struct YarnShading {
   bool active = false;      // bsdf is set: the hit is shaded with the yarn BSDF
   knit::k::KYarnBsdf bsdf{};
-  // Explicit yarn tubes (CurveShape): colour index, arc length along the yarn
+  // Explicit yarn tubes (CurveShape): colour index, the ply coordinate along the yarn
   // (pattern units) and azimuth around it (radians) at the hit.
   int color = 0;
   float arc = 0, phi = 0;

@@ -26,7 +26,7 @@ PassThrough ExplicitYarnMaterial::resolve(SurfaceInteraction& si, const RayDiffe
   sh.spec_r = knit::k::bsdf_mf_make(bp.roughness_x, bp.roughness_y, bp.eta);
   sh.spec_t = knit::k::bsdf_mf_make(bp.trans_roughness_x, bp.trans_roughness_y, bp.eta);
   if (mp.ply_detail) {
-    // Ply and fibre detail at the hit's azimuth and arc length, in the
+    // Ply and fibre detail at the hit's azimuth and ply coordinate (ply_arc), in the
     // tube's frame (x along the yarn, z the outward normal).
     const knit::k::KPlyShade ps = model_->ply().lookup(si.yarn.phi, si.yarn.arc);
     sh.point.shadow = ps.shadow;

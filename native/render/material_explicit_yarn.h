@@ -3,7 +3,7 @@
 // ply profile), at the tube's surface.
 //
 //  - Shading frame: x along the yarn, z the outward tube normal, perturbed
-//    by the ply profile at the hit's azimuth and arc length (when the
+//    by the ply profile at the hit's azimuth and ply coordinate (when the
 //    material has ply detail), exactly as the model perturbs its yarn frame.
 //  - Colour from the curve's per-point colour index; layers = 1 (a second
 //    yarn behind is real geometry here, not an attenuation factor).

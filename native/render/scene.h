@@ -36,7 +36,7 @@ struct SceneStats {
   bool explicit_yarns = false;
   size_t yarn_points = 0, yarn_segments = 0, yarn_curves = 0;
   size_t yarn_geometry_bytes = 0;  // Embree vertex/index/flag buffers of the tubes
-  size_t yarn_shading_bytes = 0;   // per-point colour, arc length, fabric normal
+  size_t yarn_shading_bytes = 0;   // per-point colour, ply coordinate, fabric normal
   double yarn_build_seconds = 0;   // making the tubes (curves, mapping onto the meshes)
   int64_t embree_bytes_without_yarns = 0;  // Embree's memory before the tubes were added
 };

@@ -51,13 +51,8 @@ YarnTubes build_yarn_tubes(const TriangleMesh& mesh, const knit::KnitMaterial& m
   uint32_t piece = 0;
   for (const knit::YarnCurve& c : ey.curves) {
     bool open = false;  // the previous point was kept
-    double arc = 0;
     for (size_t i = 0; i < c.points.size(); ++i) {
       const auto& p = c.points[i];
-      if (i > 0) {
-        const auto& q = c.points[i - 1];
-        arc += std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]));
-      }
       const Vec2 uv{float((p[0] + ox) / us), float((p[1] + oy) / us)};
       float b1 = 0, b2 = 0;
       const int64_t tri = grid.locate(uv, b1, b2);
@@ -81,7 +76,9 @@ YarnTubes build_yarn_tubes(const TriangleMesh& mesh, const knit::KnitMaterial& m
       }
       out.vertices.insert(out.vertices.end(), {pos.x, pos.y, pos.z, float(r / S)});
       out.color.push_back(static_cast<uint8_t>(c.color[i]));
-      out.arc.push_back(float(arc));
+      // The ply's length coordinate, as the model has it at this curve
+      // parameter (the tiles start at x = ox, and t runs with x).
+      out.arc.push_back(model.ply_arc(float(ox + ey.t_step * double(i))));
       out.fabric_normal.push_back(N);
       piece_of.push_back(piece);
       open = true;

@@ -26,8 +26,10 @@ struct YarnTubes {
   std::vector<float> vertices;
   std::vector<uint32_t> segments;
   std::vector<uint8_t> flags;
-  // Shading data per point: colour index, arc length along the yarn (pattern
-  // units), the base mesh's normal (the reference for the ply azimuth).
+  // Shading data per point: colour index, the ply profile's length
+  // coordinate along the yarn (KnitMaterial::ply_arc at the point's curve
+  // parameter, pattern units), the base mesh's normal (the reference for the
+  // ply azimuth).
   std::vector<uint8_t> color;
   std::vector<float> arc;
   std::vector<Vec3> fabric_normal;

@@ -600,13 +600,14 @@ void KnitMaterial::shade_yarn(const BaseHit& hit, const k::KnitLineHit& h, const
   T = k::kv3_len(T) > 1e-6f ? k::kv3_normalize(T) : k::kv3_normalize(k::kv3_cross(k::kv3(0, 1, 0), N));
   Vec3 lt = T, ln = N, lb = k::kv3_cross(N, T);
   if (params_.ply_detail) {
-    // Azimuth around the yarn from the fabric normal's projection; arc length from t.
+    // Azimuth around the yarn from the fabric normal's projection; the ply's
+    // length coordinate from t (ply_arc).
     Vec3 ref = k::kv3_sub(k::kv3(0, 0, 1), k::kv3_scale(h.tangent, h.tangent.z));
     if (k::kv3_len(ref) < 1e-4f) ref = k::kv3(1, 0, 0);
     ref = k::kv3_normalize(ref);
     const Vec3 tt = k::kv3_normalize(h.tangent);
     const float phi = std::atan2(k::kv3_dot(N, k::kv3_cross(tt, ref)), k::kv3_dot(N, ref));
-    const k::KPlyShade ps = ply_.lookup(phi, h.t * arc_per_t_);
+    const k::KPlyShade ps = ply_.lookup(phi, ply_arc(h.t));
     sh.point.shadow = ps.shadow;
     lt = to_world(ps.t, T, lb, N);
     ln = to_world(ps.n, T, lb, N);

@@ -27,6 +27,7 @@ ExplicitYarns explicit_yarns(const Pattern& pattern, const StitchParams& params,
   out.radius = params.r;
   out.width = kTwoPi * double(cols);
   out.height = double(params.row_spacing()) * double(rows);
+  out.t_step = kTwoPi / samples_per_stitch;
   out.curves.resize(size_t(rows));
   const auto mod = [](long long a, long long n) { return int(((a % n) + n) % n); };
   for (long long k = 0; k < rows; ++k) {
@@ -36,7 +37,7 @@ ExplicitYarns explicit_yarns(const Pattern& pattern, const StitchParams& params,
     yc.points.reserve(size_t(n + 1));
     yc.color.reserve(size_t(n + 1));
     for (long long i = 0; i <= n; ++i) {
-      const double t = kTwoPi * double(i) / samples_per_stitch;
+      const double t = out.t_step * double(i);
       yc.points.push_back(yarn_curve_exact(pattern, params, int(k), t).p);
       const long long c = std::min<long long>(i / samples_per_stitch, cols - 1);
       const int pr = pattern.rows() - 1 - mod(k, pattern.rows());

@@ -221,6 +221,16 @@ class KnitMaterial {
   // when it leaves without meeting any).
   KnitShade shade_from(const BaseHit& hit, const KnitShade& from, Vec3 dir_world, const FrameProvider* frame) const;
 
+  // The ply profile's length coordinate along the yarn (PlyProfile::lookup's
+  // s) at curve parameter t (KnitLineHit::t; yarn_curve_exact's t, which
+  // runs 2 pi per stitch from x = 0): t times the mean arc length per unit
+  // of t over a stitch of knit. It is part of the yarn's definition, so the
+  // explicit-yarn ground truth takes it from here too (render/yarn_tubes):
+  // the ply helix turns by the same angle over every stitch, and within a
+  // stitch in step with t rather than with the true arc length (the loop's
+  // speed |dY/dt| varies along it; docs/bsdf.md, "Ply phase").
+  float ply_arc(float t) const { return t * arc_per_t_; }
+
   // The kernel BSDF at a shading point (colour from the palette, roughness,
   // layers and ply shadow from `sh`).
   k::KYarnBsdf kernel_bsdf(const KnitShade& sh) const;

@@ -24,6 +24,7 @@ struct ExplicitYarns {
   double radius = 0;              // tube radius (= params.r)
   double width = 0;               // x extent of the tiled area: 2 pi cols tiles_u
   double height = 0;              // y extent: row_spacing rows tiles_v
+  double t_step = 0;              // point i of every curve is at curve parameter i t_step (2 pi / samples_per_stitch)
 };
 
 // The yarn centre curve of every row of `tiles_u` x `tiles_v` repeats of the
