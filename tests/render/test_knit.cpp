@@ -171,6 +171,69 @@ TEST(YarnTubes, FlatQuadPlacesTheExactCurvesBelowTheMesh) {
   EXPECT_EQ(y.geometry_bytes(), y.num_points() * 16 + y.segments.size() * 5);
 }
 
+// The tubes' ply coordinate is the model's (KnitMaterial::ply_arc: the
+// curve parameter times the mean arc length per unit of it over a knit
+// stitch), checked against that definition computed here in double
+// precision, and it does not depend on the polyline's density. (It was the
+// polyline's summed length, which drifts along a row with the density:
+// 12% of a 512-pixel half cylinder's pixels' values, docs/results.md.)
+TEST(YarnTubes, PlyCoordinateIsTheModelsAtEveryDensity) {
+  const TriangleMesh quad = load_mesh(mesh("quad.obj"));  // UV = position + 0.5
+  const auto model = knit_model("KP/PK", 40.0f);
+  const YarnTubes coarse = build_yarn_tubes(quad, *model, 16), fine = build_yarn_tubes(quad, *model, 64);
+  // Mean |dY/dt| over a knit stitch, midpoint rule on 20,000 points.
+  const knit::Pattern knit_only = knit::Pattern::from_rows({{0}});
+  double len = 0;
+  const int n = 20000;
+  for (int i = 0; i < n; ++i) {
+    const knit::CurvePoint c = knit::yarn_curve_exact(knit_only, model->params().stitch, 0, 6.283185307179586 * (i + 0.5) / n);
+    len += std::sqrt(c.dp[0] * c.dp[0] + c.dp[1] * c.dp[1] + c.dp[2] * c.dp[2]);
+  }
+  const double per_t = len / n;
+  const float S = 40.0f, top = model->surface().shell_top();
+  const knit::Pattern& pat = model->surface().pattern();
+  const double cell_h = model->surface().cell_height(), a = model->params().stitch.a;
+  // The curve parameter of a tube point: where the exact curve passes
+  // through it (pattern space), found by a scan of the rows and of t around
+  // its x (a loop strays at most about a from t in x), then Newton on the
+  // squared distance.
+  const auto t_of = [&](Vec3 w) {
+    const double px = S * (w.x + 0.5), py = S * (w.y + 0.5), pz = w.z * S + top;
+    const auto dist2 = [&](int row, double t) {
+      const knit::CurvePoint c = knit::yarn_curve_exact(pat, model->params().stitch, row, t);
+      return (c.p[0] - px) * (c.p[0] - px) + (c.p[1] - py) * (c.p[1] - py) + (c.p[2] - pz) * (c.p[2] - pz);
+    };
+    double best_d = 1e30, best_t = 0;
+    int best_row = 0;
+    const int k0 = int(std::floor(py / cell_h));
+    for (int row = k0 - 3; row <= k0 + 3; ++row)
+      for (double t = px - 2 * a - 1; t <= px + 2 * a + 1; t += 0.005)
+        if (const double d = dist2(row, t); d < best_d) best_d = d, best_t = t, best_row = row;
+    for (double h = 0.005; h > 1e-9; h *= 0.5) {  // golden-free refinement: halving steps
+      if (dist2(best_row, best_t - h) < best_d) best_t -= h, best_d = dist2(best_row, best_t);
+      else if (dist2(best_row, best_t + h) < best_d) best_t += h, best_d = dist2(best_row, best_t);
+    }
+    EXPECT_LT(best_d, 1e-8) << "no exact curve point at the tube point";
+    return best_t;
+  };
+  size_t checked = 0;
+  for (size_t i = 0; i < coarse.num_points(); i += 7) {
+    const Vec3 p = coarse.point(i);
+    // The same point among the fine tubes' (every fourth of theirs).
+    size_t best = 0;
+    float d = 1e9f;
+    for (size_t j = 0; j < fine.num_points(); ++j)
+      if (length(fine.point(j) - p) < d) d = length(fine.point(j) - p), best = j;
+    ASSERT_LT(d, 1e-6f) << "point " << i;
+    EXPECT_EQ(coarse.arc[i], fine.arc[best]) << "point " << i;
+    // Against the definition.
+    const double t = t_of(p);
+    EXPECT_NEAR(coarse.arc[i], t * per_t, 2e-5 * std::fabs(t * per_t) + 1e-4) << "point " << i << ", t " << t;
+    ++checked;
+  }
+  EXPECT_GT(checked, 100u);
+}
+
 TEST(YarnTubes, TooManyPointsIsAClearError) {
   const TriangleMesh quad = load_mesh(mesh("quad.obj"));
   const auto model = knit_model("K", 4000.0f);
@@ -665,11 +728,26 @@ void front_and_back_light(SceneDesc& d) {
 // and bounces from a yarn hit crossing the rest of the shell) the model was
 // 18% too bright here, 5% in the close-up and 23% on the swatch close-up;
 // now within 3% (docs/results.md).
+//
+// Per pixel, the near field and the tubes differ by little more than their
+// noise since the tubes take the model's ply coordinate (2026-12-05; before,
+// the polyline's summed length, whose drift along the rows put the ply's
+// grooves and glints on other pixels): the RMSE is asserted below 1.4x the
+// RMSE the two images' noise alone gives (measured 0.86x here, 1.16x in the
+// half cylinder's close-up, 1.09x in the swatch's, 1.10x multi-scale; it was
+// 1.00x, 2.62x, 2.14x and 1.69x).
+void expect_within_noise(const Comparison& c) {
+  EXPECT_LT(c.pixels.rmse, 1.4 * c.noise_rmse) << "the model and the tubes differ per pixel beyond their noise";
+}
+
 TEST(KnitVsExplicit, HalfCylinderFarView) {
   const Comparison c = compare_model_and_explicit("half_cylinder_front.json", 48, 256, front_and_back_light);
+  // Measured +0.5%, 0.113, 0.043 (+0.4%, 0.134, 0.057 before the shared
+  // ply coordinate).
   EXPECT_LT(std::fabs(c.pixels.rel_bias), 0.05);
-  EXPECT_LT(c.pixels.rel_mae, 0.2);
-  EXPECT_LT(c.blocks.rel_rmse, 0.12);
+  EXPECT_LT(c.pixels.rel_mae, 0.16);
+  EXPECT_LT(c.blocks.rel_rmse, 0.08);
+  expect_within_noise(c);
 }
 
 // The same in multi-scale mode: at 48x48 a pixel covers several stitches,
@@ -696,9 +774,11 @@ TEST(KnitVsExplicit, HalfCylinderFarViewMultiScale) {
 
 TEST(KnitVsExplicit, HalfCylinderCloseUp) {
   const Comparison c = compare_model_and_explicit("half_cylinder_closeup.json", 48, 256);
+  // Measured -1.0%, 0.063, 0.042 (-1.2%, 0.135, 0.069 before).
   EXPECT_LT(std::fabs(c.pixels.rel_bias), 0.05);
-  EXPECT_LT(c.pixels.rel_mae, 0.25);
-  EXPECT_LT(c.blocks.rel_rmse, 0.12);
+  EXPECT_LT(c.pixels.rel_mae, 0.12);
+  EXPECT_LT(c.blocks.rel_rmse, 0.08);
+  expect_within_noise(c);
 }
 
 TEST(KnitVsExplicit, SwatchFarViewMultiScale) {
@@ -724,9 +804,11 @@ TEST(KnitVsExplicit, SwatchDistantMultiScale) {
 
 TEST(KnitVsExplicit, SwatchCloseUp) {
   const Comparison c = compare_model_and_explicit("swatch_closeup.json", 48, 256);
+  // Measured -1.9%, 0.059, 0.031 (-1.6%, 0.099, 0.052 before).
   EXPECT_LT(std::fabs(c.pixels.rel_bias), 0.05);
-  EXPECT_LT(c.pixels.rel_mae, 0.2);
-  EXPECT_LT(c.blocks.rel_rmse, 0.12);
+  EXPECT_LT(c.pixels.rel_mae, 0.12);
+  EXPECT_LT(c.blocks.rel_rmse, 0.07);
+  expect_within_noise(c);
 }
 
 // Multi-scale in close-up: footprints below a stitch cell are shaded as the
@@ -743,9 +825,11 @@ TEST(KnitVsExplicit, SwatchCloseUpMultiScale) {
       m.knit.model = std::make_shared<const knit::KnitMaterial>(m.knit.model->surface().pattern(), p);
     }
   });
+  // Measured -2.0%, 0.078, 0.037 (-1.6%, 0.109, 0.052 before).
   EXPECT_LT(std::fabs(c.pixels.rel_bias), 0.05);
-  EXPECT_LT(c.pixels.rel_mae, 0.2);
-  EXPECT_LT(c.blocks.rel_rmse, 0.12);
+  EXPECT_LT(c.pixels.rel_mae, 0.14);
+  EXPECT_LT(c.blocks.rel_rmse, 0.07);
+  expect_within_noise(c);
 }
 
 // Footprints centred at their pixel's centre (footprint_centre "pixel")
