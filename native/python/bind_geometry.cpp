@@ -457,6 +457,7 @@ steps (mean CAPM segments), points, hits, color_weights (N,8).)doc");
         d["radius"] = y.radius;
         d["width"] = y.width;
         d["height"] = y.height;
+        d["t_step"] = y.t_step;
         return d;
       },
       ::py::arg("pattern"), ::py::arg("params") = StitchParams{}, ::py::arg("tiles_u") = 1,
@@ -465,7 +466,8 @@ The exact yarn centre curves of tiles_u x tiles_v repeats of the pattern, in
 the pattern-space coordinates KnitSurface.query and capm use (one dense
 polyline per knitted row, row 0 at the bottom), with the tube radius. Returns
 a dict: curves (list of (M,3) arrays), colors (list of per-point colour
-index arrays), rows, radius, width, height.)doc");
+index arrays), rows, radius, width, height, t_step (point i of every curve
+is at curve parameter i t_step: 2 pi / samples_per_stitch).)doc");
 }
 
 }  // namespace knit::py

@@ -285,6 +285,12 @@ class ExplicitYarnsTest(unittest.TestCase):
         self.assertAlmostEqual(y["width"], 2 * math.pi * 6, places=4)
         self.assertAlmostEqual(y["height"], 4.5 * 6, places=4)
         self.assertEqual(y["rows"], list(range(6)))
+        self.assertAlmostEqual(y["t_step"], 2 * math.pi / 32, places=12)
+        # Point i lies at curve parameter i t_step: a stitch (2 pi of t) is
+        # 32 points, so the curves repeat every 3 * 32 points in x by one
+        # pattern width (the pattern repeats along the row).
+        c = y["curves"][0]
+        np.testing.assert_allclose(c[96:, 0] - c[:-96, 0], 2 * math.pi * 3, atol=1e-9)
 
     def test_rejects_bad_tiles(self):
         with self.assertRaises(ValueError):
