@@ -40,6 +40,7 @@ YarnTubes build_yarn_tubes(const TriangleMesh& mesh, const knit::KnitMaterial& m
   const knit::ExplicitYarns ey = knit::explicit_yarns(pattern, model.params().stitch, int(tiles_u), int(tiles_v),
                                                       samples_per_stitch);
   const double ox = double(tx0) * px, oy = double(ty0) * py;
+  const long long row0 = ty0 * pattern.rows();  // the tiles' first row, from the pattern's row 0
 
   YarnTubes out;
   out.vertices.reserve(size_t(points) * 4);
@@ -77,8 +78,9 @@ YarnTubes build_yarn_tubes(const TriangleMesh& mesh, const knit::KnitMaterial& m
       out.vertices.insert(out.vertices.end(), {pos.x, pos.y, pos.z, float(r / S)});
       out.color.push_back(static_cast<uint8_t>(c.color[i]));
       // The ply's length coordinate, as the model has it at this curve
-      // parameter (the tiles start at x = ox, and t runs with x).
-      out.arc.push_back(model.ply_arc(float(ox + ey.t_step * double(i))));
+      // parameter and row (the tiles start at x = ox, and t runs with x;
+      // at row ty0 times the pattern's rows).
+      out.arc.push_back(model.ply_arc(float(ox + ey.t_step * double(i)), int(row0 + c.row)));
       out.fabric_normal.push_back(N);
       piece_of.push_back(piece);
       open = true;

@@ -96,6 +96,7 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
     len += std::sqrt(c.dp[0] * c.dp[0] + c.dp[1] * c.dp[1] + c.dp[2] * c.dp[2]);
   }
   arc_per_t_ = float(len / n);
+  stitch_arc_ = float(6.283185307179586 * len / n);
   double g = 0;
   for (int i = 0; i < 64; ++i)
     for (int j = 0; j < 16; ++j) g += ply_.lookup(6.2831853f * (i + 0.5f) / 64, 0.37f * float(j)).shadow;
@@ -607,7 +608,7 @@ void KnitMaterial::shade_yarn(const BaseHit& hit, const k::KnitLineHit& h, const
     ref = k::kv3_normalize(ref);
     const Vec3 tt = k::kv3_normalize(h.tangent);
     const float phi = std::atan2(k::kv3_dot(N, k::kv3_cross(tt, ref)), k::kv3_dot(N, ref));
-    const k::KPlyShade ps = ply_.lookup(phi, ply_arc(h.t));
+    const k::KPlyShade ps = ply_.lookup(phi, ply_arc(h.t, h.row));
     sh.point.shadow = ps.shadow;
     lt = to_world(ps.t, T, lb, N);
     ln = to_world(ps.n, T, lb, N);

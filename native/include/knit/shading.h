@@ -13,6 +13,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -223,13 +224,20 @@ class KnitMaterial {
 
   // The ply profile's length coordinate along the yarn (PlyProfile::lookup's
   // s) at curve parameter t (KnitLineHit::t; yarn_curve_exact's t, which
-  // runs 2 pi per stitch from x = 0): t times the mean arc length per unit
-  // of t over a stitch of knit. It is part of the yarn's definition, so the
-  // explicit-yarn ground truth takes it from here too (render/yarn_tubes):
-  // the ply helix turns by the same angle over every stitch, and within a
-  // stitch in step with t rather than with the true arc length (the loop's
-  // speed |dY/dt| varies along it; docs/bsdf.md, "Ply phase").
-  float ply_arc(float t) const { return t * arc_per_t_; }
+  // runs 2 pi per stitch from x = 0) of row `row` (KnitLineHit::row, from
+  // the bottom, unwrapped): t times the mean arc length per unit of t over a
+  // stitch of knit, plus the row's own phase, the golden-ratio sequence of
+  // the row times a stitch's length (so that the plies of rows above one
+  // another are not in step, as they are not in a knitted piece). It is
+  // part of the yarn's definition, so the explicit-yarn ground truth takes
+  // it from here too (render/yarn_tubes): the ply helix turns by the same
+  // angle over every stitch, and within a stitch in step with t rather than
+  // with the true arc length (the loop's speed |dY/dt| varies along it;
+  // docs/bsdf.md, "Ply phase").
+  float ply_arc(float t, int row) const {
+    const double g = double(row) * 0.6180339887498949;
+    return t * arc_per_t_ + float(g - std::floor(g)) * stitch_arc_;
+  }
 
   // The kernel BSDF at a shading point (colour from the palette, roughness,
   // layers and ply shadow from `sh`).
@@ -341,6 +349,7 @@ class KnitMaterial {
   bool table_from_cache_ = false, table_marches_from_cache_ = false, table_shadows_from_cache_ = false;
   std::string table_cache_file_, table_cache_note_;
   float arc_per_t_ = 1;     // mean arc length of the yarn per unit of curve parameter
+  float stitch_arc_ = 6.2831853f;  // arc_per_t_ times 2 pi: a stitch's length
   float mean_shadow_ = 1;   // ply shadow averaged around and along the yarn
   KnitShade unshaded_;      // what unshaded() returns, set up once
 };
