@@ -109,7 +109,7 @@ struct KnitDesc {
   std::vector<int32_t> colors;
   KnitFrames frames = KnitFrames::Exact;
   std::string frames_file;     // KnitFrames::Baked: the resolved frame image
-  int explicit_samples = 32;   // explicit-yarn mode: polyline points per stitch
+  int explicit_samples = 64;   // explicit-yarn mode: polyline points per stitch (docs/scene-format.md)
   float footprint_scale = 1;   // multi-scale footprint, in pixels (whatever the spp)
   // Where a camera sample's multi-scale footprint is centred: at its pixel's
   // centre, so that every sample of a pixel aggregates the same box (the
