@@ -96,7 +96,6 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
     len += std::sqrt(c.dp[0] * c.dp[0] + c.dp[1] * c.dp[1] + c.dp[2] * c.dp[2]);
   }
   arc_per_t_ = float(len / n);
-  stitch_arc_ = float(6.283185307179586 * len / n);
   double g = 0;
   for (int i = 0; i < 64; ++i)
     for (int j = 0; j < 16; ++j) g += ply_.lookup(6.2831853f * (i + 0.5f) / 64, 0.37f * float(j)).shadow;

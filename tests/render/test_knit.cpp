@@ -176,9 +176,9 @@ TEST(YarnTubes, FlatQuadPlacesTheExactCurvesBelowTheMesh) {
 // curve parameter times the mean arc length per unit of it over a knit
 // stitch, plus the row's phase), checked against that definition computed
 // here in double precision, and it does not depend on the polyline's
-// density. (It was the
-// polyline's summed length, which drifts along a row with the density:
-// 12% of a 512-pixel half cylinder's pixels' values, docs/results.md.)
+// density. (It was the polyline's summed length, which drifts along a row
+// with the density: 12% of a 512-pixel half cylinder's pixels' values,
+// docs/results.md.)
 TEST(YarnTubes, PlyCoordinateIsTheModelsAtEveryDensity) {
   const TriangleMesh quad = load_mesh(mesh("quad.obj"));  // UV = position + 0.5
   const auto model = knit_model("KP/PK", 40.0f);
@@ -197,8 +197,8 @@ TEST(YarnTubes, PlyCoordinateIsTheModelsAtEveryDensity) {
   const double cell_h = model->surface().cell_height(), a = model->params().stitch.a;
   // The curve parameter of a tube point: where the exact curve passes
   // through it (pattern space), found by a scan of the rows and of t around
-  // its x (a loop strays at most about a from t in x), then Newton on the
-  // squared distance.
+  // its x (a loop strays at most about a from t in x), then refined by
+  // halving steps on the squared distance.
   const auto t_of = [&](Vec3 w) {
     const double px = S * (w.x + 0.5), py = S * (w.y + 0.5), pz = w.z * S + top;
     const auto dist2 = [&](int row, double t) {
@@ -211,10 +211,13 @@ TEST(YarnTubes, PlyCoordinateIsTheModelsAtEveryDensity) {
     for (int row = k0 - 3; row <= k0 + 3; ++row)
       for (double t = px - 2 * a - 1; t <= px + 2 * a + 1; t += 0.005)
         if (const double d = dist2(row, t); d < best_d) best_d = d, best_t = t, best_row = row;
-    for (double h = 0.005; h > 1e-9; h *= 0.5) {  // golden-free refinement: halving steps
-      if (dist2(best_row, best_t - h) < best_d) best_t -= h, best_d = dist2(best_row, best_t);
-      else if (dist2(best_row, best_t + h) < best_d) best_t += h, best_d = dist2(best_row, best_t);
-    }
+    for (double h = 0.005; h > 1e-9; h *= 0.5)
+      for (const double step : {-h, h})
+        if (const double d = dist2(best_row, best_t + step); d < best_d) {
+          best_t += step;
+          best_d = d;
+          break;
+        }
     EXPECT_LT(best_d, 1e-8) << "no exact curve point at the tube point";
     return std::make_pair(best_t, best_row);
   };

@@ -236,7 +236,7 @@ class KnitMaterial {
   // docs/bsdf.md, "Ply phase").
   float ply_arc(float t, int row) const {
     const double g = double(row) * 0.6180339887498949;
-    return t * arc_per_t_ + float(g - std::floor(g)) * stitch_arc_;
+    return t * arc_per_t_ + float(g - std::floor(g)) * (6.2831853f * arc_per_t_);
   }
 
   // The kernel BSDF at a shading point (colour from the palette, roughness,
@@ -349,7 +349,6 @@ class KnitMaterial {
   bool table_from_cache_ = false, table_marches_from_cache_ = false, table_shadows_from_cache_ = false;
   std::string table_cache_file_, table_cache_note_;
   float arc_per_t_ = 1;     // mean arc length of the yarn per unit of curve parameter
-  float stitch_arc_ = 6.2831853f;  // arc_per_t_ times 2 pi: a stitch's length
   float mean_shadow_ = 1;   // ply shadow averaged around and along the yarn
   KnitShade unshaded_;      // what unshaded() returns, set up once
 };
