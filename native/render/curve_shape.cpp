@@ -98,13 +98,24 @@ void CurveShape::interaction(const RayDifferential& ray, float t, unsigned prim,
   const float s = std::clamp(u, 0.0f, 1.0f);
   Vec3 tan = tangent_at(prim, 0) * (1 - s) + tangent_at(prim, 1) * s;
   if (!(length2(tan) > 0)) tan = e;
-  si.shading = Frame::from_normal_tangent(n, tan);
+  // Shaded smooth: the normal turned perpendicular to the tangent
+  // interpolated along the segment. A segment's own normal is perpendicular
+  // to its chord and jumps at every point by the curve's turn between
+  // points, which moved the glints with explicit_samples (docs/renderer.md,
+  // "Tube density"); this one follows the curve's, to second order in the
+  // segment's length. The geometric normal stays the segment's.
+  const Vec3 th = normalize(tan);
+  Vec3 ns = n - th * dot(n, th);
+  const float lns = length(ns);
+  ns = lns > 1e-4f && std::isfinite(lns) ? ns / lns : n;
+  si.shading = Frame::from_normal_tangent(ns, tan);
   si.uv = {s, 0};
   si.has_uv = false;
   si.footprint.valid = false;
   // Shading data for the yarn BSDF.
   const size_t nearest = s < 0.5f ? k : k + 1;
   si.yarn.color = y.color[nearest];
+  si.yarn.segment = std::sqrt(e2);
   si.yarn.arc = y.arc[k] * (1 - s) + y.arc[k + 1] * s;
   // Azimuth around the yarn from the fabric normal, as knit::KnitMaterial::shade.
   const Vec3 tt = si.shading.t;
@@ -112,7 +123,7 @@ void CurveShape::interaction(const RayDifferential& ray, float t, unsigned prim,
   Vec3 ref = nf - tt * dot(nf, tt);
   if (length(ref) < 1e-4f) ref = Frame::from_normal(tt).t;
   ref = normalize(ref);
-  si.yarn.phi = std::atan2(dot(n, cross(tt, ref)), dot(n, ref));
+  si.yarn.phi = std::atan2(dot(ns, cross(tt, ref)), dot(ns, ref));
 }
 
 }  // namespace knit::render

@@ -132,6 +132,13 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
         if (pt.from_sub_cells) ++stats.sub_cell_resolves;
         if (pt.quarter_cell) ++stats.quarter_cell_resolves;
         if (pt.aggregated) ++stats.aggregate_resolves;
+        if (depth == 0 && !pt.pass && si.yarn.segment > 0 && ray.cone_spread > 0) {
+          // A camera path's hit on a yarn tube: how many segments its pixel spans.
+          const float span = si.cone_width / si.yarn.segment;
+          size_t bin = 0;
+          while (bin < kTubeSpanEdges.size() && !(span < kTubeSpanEdges[bin])) ++bin;
+          ++stats.tube_spans[bin];
+        }
       } else {
         // Where the interpolated normal puts the viewer on the other side than
         // the geometry does (grazing views of smooth-shaded meshes), shade with

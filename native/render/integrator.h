@@ -4,8 +4,10 @@
 // See docs/renderer.md#integrator.
 #pragma once
 
+#include <array>
 #include <cstdint>
 
+#include "render/report.h"
 #include "render/rng.h"
 #include "render/scene.h"
 
@@ -30,6 +32,7 @@ struct PathStats {
   uint64_t aggregate_resolves = 0;  // resolves the knit model aggregated over marched footprint points
   uint64_t marches_spared = 0;  // light samples from inside a yarn shell that an opaque object blocked
                                 // (Accel::occluded_by_blockers): no self-shadowing march
+  std::array<uint64_t, kTubeBins> tube_spans{};  // camera hits on yarn tubes by segments per pixel (kTubeSpanEdges)
 
   void add(const PathStats& o) {
     camera_rays += o.camera_rays;
@@ -47,6 +50,7 @@ struct PathStats {
     quarter_cell_resolves += o.quarter_cell_resolves;
     aggregate_resolves += o.aggregate_resolves;
     marches_spared += o.marches_spared;
+    for (size_t i = 0; i < tube_spans.size(); ++i) tube_spans[i] += o.tube_spans[i];
   }
   uint64_t total_rays() const { return camera_rays + bounce_rays + shadow_rays; }
 };

@@ -17,6 +17,9 @@ struct YarnShading {
   // (pattern units) and azimuth around it (radians) at the hit.
   int color = 0;
   float arc = 0, phi = 0;
+  // ... and the length of the tube segment hit (world units; 0 elsewhere),
+  // for the render report's count of pixels that span few segments.
+  float segment = 0;
   // The knit model's near field: the yarn point hit inside the shell
   // (pattern space) and the base mesh's frame there, for self-shadowing and
   // bounces inside the shell (KnitModelMaterial).

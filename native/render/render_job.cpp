@@ -162,6 +162,7 @@ RenderJobResult run_render_job(const RenderJob& job, const std::function<void(co
   rep.sub_boxes_reused = r.stats.sub_boxes_reused;
   rep.quarter_cell_resolves = r.stats.quarter_cell_resolves;
   rep.aggregate_resolves = r.stats.aggregate_resolves;
+  rep.tube_spans = r.stats.tube_spans;
   rep.triangles = scene.stats().triangles;
   rep.mesh_bytes = scene.stats().mesh_bytes;
   rep.embree_bytes = scene.accel().embree_bytes();
@@ -173,6 +174,8 @@ RenderJobResult run_render_job(const RenderJob& job, const std::function<void(co
   rep.knit_binding_bytes = st.knit_binding_bytes;
   rep.explicit_yarns = st.explicit_yarns;
   rep.yarn_points = st.yarn_points;
+  rep.yarn_samples_min = st.yarn_samples_min;
+  rep.yarn_samples_max = st.yarn_samples_max;
   rep.yarn_segments = st.yarn_segments;
   rep.yarn_curves = st.yarn_curves;
   rep.yarn_geometry_bytes = st.yarn_geometry_bytes;

@@ -4,7 +4,10 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <string>
 #include <nlohmann/json.hpp>
+
+#include "render/scene_desc.h"
 
 namespace knit::render {
 
@@ -113,6 +116,31 @@ std::string RenderReport::to_text() const {
                     100.0 * double(quarter_cell_resolves) / double(resolves));
       s += buf;
     }
+    // Tubes too coarse for their pixels: say how many points they need.
+    if (explicit_yarns && coarse_tube_share() >= 0.1 && yarn_samples_min > 0) {
+      const int need = yarn_samples_min * tube_samples_factor();
+      // (a tenth of the hits or more below the lowest edge: `need` is a floor)
+      uint64_t all = 0;
+      for (uint64_t n : tube_spans) all += n;
+      const bool floor = 10 * tube_spans[0] >= all;
+      const std::string now = yarn_samples_min == yarn_samples_max
+                                  ? std::to_string(yarn_samples_min)
+                                  : std::to_string(yarn_samples_min) + " to " + std::to_string(yarn_samples_max);
+      std::string advice;
+      if (need <= KnitDesc::kMaxExplicitSamples)
+        advice = "\"explicit_samples\": " + std::string(floor ? "at least " : "") + std::to_string(need) + " (now " +
+                 now + ") would give nine tenths of them " + std::to_string(int(kTubeSpanEnough)) + " or more";
+      else
+        advice = "nine tenths of them would need \"explicit_samples\" of " + std::to_string(need) +
+                 " or more (now " + now + "), above its limit of " + std::to_string(KnitDesc::kMaxExplicitSamples) +
+                 ": at this many pixels a stitch the tubes' glints are not converged pixel by pixel (compare blocks of pixels)";
+      std::snprintf(buf, sizeof buf,
+                    "  hint        %.0f%% of the camera's hits on yarn tubes were in pixels spanning fewer than %d "
+                    "tube segments, where the polylines' corners move the glints (docs/renderer.md, \"Tube "
+                    "density\"): %s\n",
+                    100.0 * coarse_tube_share(), int(kTubeSpanEnough), advice.c_str());
+      s += buf;
+    }
     if (explicit_yarns) {
       std::snprintf(buf, sizeof buf,
                     "  yarns       explicit: %zu points, %zu segments, %zu curves (built in %.2f s); geometry %s, "
@@ -135,6 +163,33 @@ std::string RenderReport::to_text() const {
   }
   s += "  output      " + output + "\n";
   return s;
+}
+
+double RenderReport::coarse_tube_share() const {
+  uint64_t all = 0, coarse = 0;
+  for (size_t i = 0; i < tube_spans.size(); ++i) {
+    all += tube_spans[i];
+    if (i < kTubeSpanEdges.size() && kTubeSpanEdges[i] <= kTubeSpanEnough) coarse += tube_spans[i];
+  }
+  return all ? double(coarse) / double(all) : 0.0;
+}
+
+int RenderReport::tube_samples_factor() const {
+  uint64_t all = 0;
+  for (uint64_t n : tube_spans) all += n;
+  if (all == 0) return 0;
+  // The first bin whose hits and those below it make a tenth of the hits or
+  // more: nine tenths of the hits span at least its lower edge.
+  uint64_t below = 0;
+  size_t bin = 0;
+  for (; bin < tube_spans.size(); ++bin) {
+    below += tube_spans[bin];
+    if (10 * below >= all) break;
+  }
+  const float lower = bin == 0 ? kTubeSpanEdges[0] / 2 : kTubeSpanEdges[bin - 1];
+  int factor = 1;
+  while (float(factor) * lower < kTubeSpanEnough) factor *= 2;
+  return factor;
 }
 
 std::string RenderReport::to_json() const {
@@ -176,7 +231,11 @@ std::string RenderReport::to_json() const {
                {"quarter_cell_near_field_hits", quarter_cell_resolves},
                {"aggregated_hits", aggregate_resolves}, {"marches_spared", marches_spared},
                {"yarn_points", yarn_points}, {"yarn_segments", yarn_segments}, {"yarn_curves", yarn_curves},
-               {"yarn_build_seconds", yarn_build_seconds}};
+               {"yarn_build_seconds", yarn_build_seconds},
+               {"explicit_samples", {{"min", yarn_samples_min}, {"max", yarn_samples_max}}},
+               {"tube_pixel_spans", {{"edges", kTubeSpanEdges}, {"camera_hits", tube_spans}}},
+               {"coarse_tube_share", coarse_tube_share()},
+               {"tube_samples_factor", tube_samples_factor()}};
   return j.dump(2) + "\n";
 }
 

@@ -38,6 +38,7 @@ struct SceneStats {
   size_t yarn_geometry_bytes = 0;  // Embree vertex/index/flag buffers of the tubes
   size_t yarn_shading_bytes = 0;   // per-point colour, ply coordinate, fabric normal
   double yarn_build_seconds = 0;   // making the tubes (curves, mapping onto the meshes)
+  int yarn_samples_min = 0, yarn_samples_max = 0;  // explicit_samples of the materials made tubes
   int64_t embree_bytes_without_yarns = 0;  // Embree's memory before the tubes were added
 };
 

@@ -1,4 +1,5 @@
 // Scene construction: SceneDesc -> materials, meshes in the Accel, lights.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -166,6 +167,9 @@ Scene::Scene(const SceneDesc& desc, const BuildOptions& options, Warnings& warni
         continue;
       }
       stats_.yarn_points += tubes->num_points();
+      const int samples = job.material->knit.explicit_samples;
+      stats_.yarn_samples_min = stats_.yarn_samples_min ? std::min(stats_.yarn_samples_min, samples) : samples;
+      stats_.yarn_samples_max = std::max(stats_.yarn_samples_max, samples);
       stats_.yarn_segments += tubes->segments.size();
       stats_.yarn_curves += tubes->curves;
       // (twice the vertices: the scaled copy Embree sees, CurveShape::attach)
