@@ -12,8 +12,8 @@ namespace knit::render {
 // tube segments one pixel spans there (the pixel's cone width over the
 // segment's length): bin i < kTubeBins - 1 holds ratios below
 // kTubeSpanEdges[i] (and at or above the edge before it), the last bin the
-// rest. A tube's polyline tilts its normals by facet, and where a pixel
-// spans few segments the glints move with them (docs/renderer.md, "Tube
+// rest. A tube's polyline cuts the curve's corners, and where a pixel spans
+// few segments the glints move with them (docs/renderer.md, "Tube
 // density").
 inline constexpr std::array<float, 6> kTubeSpanEdges = {0.25f, 0.5f, 1.0f, 2.0f, 4.0f, 8.0f};
 inline constexpr int kTubeBins = int(kTubeSpanEdges.size()) + 1;
