@@ -110,7 +110,9 @@ struct KnitDesc {
   KnitFrames frames = KnitFrames::Exact;
   std::string frames_file;     // KnitFrames::Baked: the resolved frame image
   int explicit_samples = 64;   // explicit-yarn mode: polyline points per stitch (docs/scene-format.md)
-  static constexpr int kMaxExplicitSamples = 256;  // (and at least 4)
+  // (and at least 4). 512 points a stitch over the half cylinder close-up's
+  // whole mesh: 2.4 GB resident (docs/renderer.md, "Tube density").
+  static constexpr int kMaxExplicitSamples = 1024;
   float footprint_scale = 1;   // multi-scale footprint, in pixels (whatever the spp)
   // Where a camera sample's multi-scale footprint is centred: at its pixel's
   // centre, so that every sample of a pixel aggregates the same box (the

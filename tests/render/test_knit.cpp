@@ -828,7 +828,9 @@ TEST(YarnTubes, TubeDensityHintReadsTheCounts) {
   rep.yarn_samples_max = 64;
   rep.tube_spans = {100, 0, 0, 900, 0, 0, 0};  // a tenth below a quarter segment: at least 16 times
   EXPECT_EQ(rep.tube_samples_factor(), 16);
-  EXPECT_NE(hint().find("of 1024 or more (now 64), above its limit of 256"), std::string::npos) << hint();
+  EXPECT_NE(hint().find("\"explicit_samples\": at least 1024 (now 64)"), std::string::npos) << hint();
+  rep.yarn_samples_min = rep.yarn_samples_max = 128;
+  EXPECT_NE(hint().find("of 2048 or more (now 128), above its limit of 1024"), std::string::npos) << hint();
   rep.explicit_yarns = false;  // the model's hits: never
   EXPECT_EQ(hint(), "");
 }

@@ -336,7 +336,9 @@ TEST(SceneParse, KnitParameterRanges) {
   EXPECT_NE(knit_error("transmit_colors", json::array({{0.5, 0.5, 0.5}, {0.1, 0.1, 0.1}})).find(
                 "materials.wool.transmit_colors: must have 1 elements, got 2"),
             std::string::npos);
-  EXPECT_NE(knit_error("explicit_samples", 2).find("materials.wool.explicit_samples: must be in [4, 256], got 2"),
+  EXPECT_NE(knit_error("explicit_samples", 2).find("materials.wool.explicit_samples: must be in [4, 1024], got 2"),
+            std::string::npos);
+  EXPECT_NE(knit_error("explicit_samples", 1025).find("materials.wool.explicit_samples: must be in [4, 1024], got 1025"),
             std::string::npos);
   EXPECT_NE(knit_error("frames", "nope.exr").find("materials.wool.frames: file not found"), std::string::npos);
   // The library's own checks, reported against the field: r beyond the curve's clearance.
