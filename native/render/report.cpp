@@ -111,7 +111,7 @@ std::string RenderReport::to_text() const {
       std::snprintf(buf, sizeof buf,
                     "  hint        %.0f%% of the knit hits were multi-scale footprints of a quarter of a stitch "
                     "cell or more, below table_min_cells, shaded as the near field: \"table_min_cells\": 0.25 "
-                    "reads them from the class table (faster, but it smooths the light within a stitch: up to 8%% over "
+                    "reads them from the class table (faster, but it keeps the mean of the plies' glints, not where each falls: up to 8.5%% over "
                     "4x4 pixel blocks from explicit yarns; docs/multiscale.md)\n",
                     100.0 * double(quarter_cell_resolves) / double(resolves));
       s += buf;
