@@ -111,8 +111,8 @@ std::string RenderReport::to_text() const {
       std::snprintf(buf, sizeof buf,
                     "  hint        %.0f%% of the knit hits were multi-scale footprints of a quarter of a stitch "
                     "cell or more, below table_min_cells, shaded as the near field: \"table_min_cells\": 0.25 "
-                    "reads them from the class table (faster, but it keeps the mean of the plies' glints, not where each falls: up to 8.5%% over "
-                    "4x4 pixel blocks from explicit yarns; docs/multiscale.md)\n",
+                    "reads them from the class table (faster, but it keeps the mean of the plies' glints, not "
+                    "where each falls: up to 8.5%% over 4x4 pixel blocks from explicit yarns; docs/multiscale.md)\n",
                     100.0 * double(quarter_cell_resolves) / double(resolves));
       s += buf;
     }
@@ -133,7 +133,8 @@ std::string RenderReport::to_text() const {
       else
         advice = "nine tenths of them would need \"explicit_samples\" of " + std::to_string(need) +
                  " or more (now " + now + "), above its limit of " + std::to_string(KnitDesc::kMaxExplicitSamples) +
-                 ": at this many pixels a stitch the tubes' glints are not converged pixel by pixel (compare blocks of pixels)";
+                 ": at this many pixels a stitch the tubes' glints are not converged pixel by pixel (compare "
+                 "blocks of pixels)";
       std::snprintf(buf, sizeof buf,
                     "  hint        %.0f%% of the camera's hits on yarn tubes were in pixels spanning fewer than %d "
                     "tube segments, where the polylines' corners move the glints (docs/renderer.md, \"Tube "
