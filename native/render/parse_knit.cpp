@@ -235,7 +235,8 @@ KnitDesc parse_knit_material(JsonObject& o, const std::string& dir, bool class_t
       k.frames_file = resolve_input_file(*f, dir);
     }
   }
-  k.explicit_samples = static_cast<int>(o.integer("explicit_samples", 4, KnitDesc::kMaxExplicitSamples, k.explicit_samples));
+  k.explicit_samples =
+      static_cast<int>(o.integer("explicit_samples", 4, KnitDesc::kMaxExplicitSamples, k.explicit_samples));
   k.footprint_scale = o.number("footprint_scale", Range::left_open(0, 16), k.footprint_scale);
   k.footprint_centre = o.choice("footprint_centre", {"pixel", "sample"}, "pixel") == "pixel" ? FootprintCentre::Pixel
                                                                                       : FootprintCentre::Sample;
