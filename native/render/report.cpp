@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <numeric>
 #include <string>
 #include <nlohmann/json.hpp>
 
@@ -120,9 +121,7 @@ std::string RenderReport::to_text() const {
     if (explicit_yarns && coarse_tube_share() >= 0.1 && yarn_samples_min > 0) {
       const int need = yarn_samples_min * tube_samples_factor();
       // (a tenth of the hits or more below the lowest edge: `need` is a floor)
-      uint64_t all = 0;
-      for (uint64_t n : tube_spans) all += n;
-      const bool floor = 10 * tube_spans[0] >= all;
+      const bool floor = 10 * tube_spans[0] >= tube_hits();
       const std::string now = yarn_samples_min == yarn_samples_max
                                   ? std::to_string(yarn_samples_min)
                                   : std::to_string(yarn_samples_min) + " to " + std::to_string(yarn_samples_max);
@@ -166,18 +165,18 @@ std::string RenderReport::to_text() const {
   return s;
 }
 
+uint64_t RenderReport::tube_hits() const { return std::accumulate(tube_spans.begin(), tube_spans.end(), uint64_t(0)); }
+
 double RenderReport::coarse_tube_share() const {
-  uint64_t all = 0, coarse = 0;
-  for (size_t i = 0; i < tube_spans.size(); ++i) {
-    all += tube_spans[i];
-    if (i < kTubeSpanEdges.size() && kTubeSpanEdges[i] <= kTubeSpanEnough) coarse += tube_spans[i];
-  }
+  const uint64_t all = tube_hits();
+  uint64_t coarse = 0;
+  for (size_t i = 0; i < kTubeSpanEdges.size(); ++i)
+    if (kTubeSpanEdges[i] <= kTubeSpanEnough) coarse += tube_spans[i];
   return all ? double(coarse) / double(all) : 0.0;
 }
 
 int RenderReport::tube_samples_factor() const {
-  uint64_t all = 0;
-  for (uint64_t n : tube_spans) all += n;
+  const uint64_t all = tube_hits();
   if (all == 0) return 0;
   // The first bin whose hits and those below it make a tenth of the hits or
   // more: nine tenths of the hits span at least its lower edge.

@@ -59,6 +59,7 @@ struct RenderReport {
   double yarn_build_seconds = 0;
   int yarn_samples_min = 0, yarn_samples_max = 0;  // the knit materials' explicit_samples (tubes' points a stitch)
   std::array<uint64_t, kTubeBins> tube_spans{};  // camera hits on yarn tubes by segments per pixel (kTubeSpanEdges)
+  uint64_t tube_hits() const;  // those hits, all bins summed
   // The share of those hits whose pixel spans fewer than kTubeSpanEnough
   // segments, and the factor on explicit_samples that would bring nine
   // tenths of them to kTubeSpanEnough (a power of two; 0 when no hits).

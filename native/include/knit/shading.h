@@ -236,7 +236,7 @@ class KnitMaterial {
   // docs/bsdf.md, "Ply phase").
   float ply_arc(float t, int row) const {
     const double g = double(row) * 0.6180339887498949;
-    return t * arc_per_t_ + float(g - std::floor(g)) * (6.2831853f * arc_per_t_);
+    return t * arc_per_t_ + float(g - std::floor(g)) * (K_2PI * arc_per_t_);
   }
 
   // The kernel BSDF at a shading point (colour from the palette, roughness,
