@@ -132,6 +132,10 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
         if (pt.from_sub_cells) ++stats.sub_cell_resolves;
         if (pt.quarter_cell) ++stats.quarter_cell_resolves;
         if (pt.aggregated) ++stats.aggregate_resolves;
+        if (depth == 0) {
+          ++stats.camera_resolves;
+          if (pt.table_would_serve) ++stats.camera_table_footprints;
+        }
         if (depth == 0 && !pt.pass && si.yarn.segment > 0 && ray.cone_spread > 0) {
           // A camera path's hit on a yarn tube: how many segments its pixel spans.
           const float span = si.cone_width / si.yarn.segment;

@@ -30,6 +30,8 @@ struct PathStats {
   uint64_t sub_boxes_reused = 0;   // ... of which took their box from the pixel's knit::FootprintMemo
   uint64_t quarter_cell_resolves = 0;  // multi-scale near-field resolves of a quarter cell or more (KnitShade::quarter_cell)
   uint64_t aggregate_resolves = 0;  // resolves the knit model aggregated over marched footprint points
+  uint64_t camera_resolves = 0;  // resolves of camera paths' first hits (depth 0)
+  uint64_t camera_table_footprints = 0;  // ... in near-field mode, of footprints multi-scale would read from its table
   uint64_t marches_spared = 0;  // light samples from inside a yarn shell that an opaque object blocked
                                 // (Accel::occluded_by_blockers): no self-shadowing march
   std::array<uint64_t, kTubeBins> tube_spans{};  // camera hits on yarn tubes by segments per pixel (kTubeSpanEdges)
@@ -49,6 +51,8 @@ struct PathStats {
     sub_boxes_reused += o.sub_boxes_reused;
     quarter_cell_resolves += o.quarter_cell_resolves;
     aggregate_resolves += o.aggregate_resolves;
+    camera_resolves += o.camera_resolves;
+    camera_table_footprints += o.camera_table_footprints;
     marches_spared += o.marches_spared;
     for (size_t i = 0; i < tube_spans.size(); ++i) tube_spans[i] += o.tube_spans[i];
   }

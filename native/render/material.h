@@ -59,6 +59,7 @@ struct PassThrough {
   bool from_sub_cells = false;  // ... from the table's sub-cells
   bool quarter_cell = false;    // ... shaded as the near field, but table_min_cells 0.25 would read it from the table
   bool aggregated = false;  // the knit model aggregated marches over the hit's multi-scale footprint
+  bool table_would_serve = false;  // near-field mode: multi-scale mode would read the hit from its class table
 };
 
 class Material {

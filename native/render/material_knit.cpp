@@ -182,6 +182,7 @@ PassThrough KnitModelMaterial::resolve(SurfaceInteraction& si, const RayDifferen
   pt.from_sub_cells = sh.from_sub_cells;
   pt.quarter_cell = sh.quarter_cell;
   pt.aggregated = sh.aggregated;
+  pt.table_would_serve = model.table_would_serve(hit);
   if (sh.pass_through) {
     pt.pass = true;  // no yarn along this ray: it goes on straight
     return pt;

@@ -162,6 +162,8 @@ RenderJobResult run_render_job(const RenderJob& job, const std::function<void(co
   rep.sub_boxes_reused = r.stats.sub_boxes_reused;
   rep.quarter_cell_resolves = r.stats.quarter_cell_resolves;
   rep.aggregate_resolves = r.stats.aggregate_resolves;
+  rep.camera_resolves = r.stats.camera_resolves;
+  rep.camera_table_footprints = r.stats.camera_table_footprints;
   rep.tube_spans = r.stats.tube_spans;
   rep.triangles = scene.stats().triangles;
   rep.mesh_bytes = scene.stats().mesh_bytes;

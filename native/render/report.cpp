@@ -117,6 +117,18 @@ std::string RenderReport::to_text() const {
                     100.0 * double(quarter_cell_resolves) / double(resolves));
       s += buf;
     }
+    // Near-field mode where pixels span a quarter of a stitch cell or more:
+    // multi-scale mode would read those footprints from its class table.
+    if (camera_resolves > 0 && 10 * camera_table_footprints >= camera_resolves) {
+      std::snprintf(buf, sizeof buf,
+                    "  hint        %.0f%% of the camera's knit hits were near-field hits on footprints of a quarter "
+                    "of a stitch cell or more (table_min_cells): \"mode\": \"multi_scale\" reads such footprints "
+                    "from a class table built once per pattern instead of marching them (4-16x faster than the "
+                    "near field at equal quality on the far swatch; it keeps the mean of the plies' glints, not "
+                    "where each falls; README, \"Choosing a mode\")\n",
+                    100.0 * double(camera_table_footprints) / double(camera_resolves));
+      s += buf;
+    }
     // Tubes too coarse for their pixels: say how many points they need.
     if (explicit_yarns && coarse_tube_share() >= 0.1 && yarn_samples_min > 0) {
       const int need = yarn_samples_min * tube_samples_factor();
@@ -229,6 +241,7 @@ std::string RenderReport::to_json() const {
                {"shell_bounces", shell_bounces}, {"table_hits", table_resolves},
                {"sub_cell_hits", sub_cell_resolves}, {"sub_cell_boxes_reused", sub_boxes_reused},
                {"quarter_cell_near_field_hits", quarter_cell_resolves},
+               {"camera_hits", camera_resolves}, {"camera_table_footprint_hits", camera_table_footprints},
                {"aggregated_hits", aggregate_resolves}, {"marches_spared", marches_spared},
                {"yarn_points", yarn_points}, {"yarn_segments", yarn_segments}, {"yarn_curves", yarn_curves},
                {"yarn_build_seconds", yarn_build_seconds},

@@ -46,6 +46,10 @@ struct RenderReport {
   uint64_t invalid_samples = 0, pass_limit = 0;
   uint64_t resolves = 0, resolve_passes = 0, shadow_resolves = 0, shell_bounces = 0, table_resolves = 0,
            sub_cell_resolves = 0, sub_boxes_reused = 0, aggregate_resolves = 0, marches_spared = 0, quarter_cell_resolves = 0;
+  // Camera paths' first hits resolved, and of them the near-field hits
+  // whose footprints multi-scale mode would read from its class table
+  // (KnitMaterial::table_would_serve): the near field's "mode" hint.
+  uint64_t camera_resolves = 0, camera_table_footprints = 0;
   size_t triangles = 0, mesh_bytes = 0;
   int64_t embree_bytes = 0, embree_peak_bytes = 0;
   int64_t peak_rss_bytes = 0;

@@ -377,6 +377,14 @@ bool KnitMaterial::near_field_at(const BaseHit& hit) const {
   return route(hit, fx, fy, e) == Route::NearField;
 }
 
+bool KnitMaterial::table_would_serve(const BaseHit& hit) const {
+  if (params_.mode == KnitMode::MultiScale) return false;
+  Vec3 fx, fy;
+  footprint_axes(hit, fx, fy);
+  const Vec3 e = k::knit_footprint_extent(surface_.geom(), fx, fy);
+  return e.x >= params_.table_min_cells && e.y >= params_.table_min_cells;
+}
+
 KnitMaterial::HitRoute KnitMaterial::route_of(const BaseHit& hit, FootprintMemo* memo) const {
   HitRoute r;
   r.route = int(route(hit, r.fx, r.fy, r.e, &r.box, memo, &r.sums));

@@ -131,5 +131,72 @@ TEST(Examples, SwatchFarFromTheTableWithQuarterCells) {
   }
 }
 
+// The near field's "mode" hint. The far swatch at its 480 pixels has
+// footprints of about a third of a stitch cell (the tests above: multi-scale
+// reads them from the class table); at half the size two thirds, at 1,200
+// pixels about a seventh, below table_min_cells (0.25). Rendered in
+// near-field mode, the camera's hits are counted as footprints multi-scale
+// would read from its table accordingly, and the report's hint names
+// "multi_scale" where a tenth or more are. Multi-scale mode and explicit
+// yarns count none.
+TEST(Examples, NearFieldCountsTheFootprintsMultiScaleWouldReadFromItsTable) {
+  struct Case {
+    int width;
+    bool explicit_yarns;
+    KnitMode mode;
+    double min_share, max_share;
+  };
+  for (const Case& c : {Case{240, false, KnitMode::NearField, 0.98, 1.0}, Case{480, false, KnitMode::NearField, 0.9, 1.0},
+                        Case{1200, false, KnitMode::NearField, 0.0, 0.02},
+                        Case{240, false, KnitMode::MultiScale, 0.0, 0.0}, Case{240, true, KnitMode::NearField, 0.0, 0.0}}) {
+    SCOPED_TRACE(c.width);
+    SCOPED_TRACE(c.explicit_yarns ? "explicit yarns" : c.mode == KnitMode::NearField ? "near field" : "multi-scale");
+    SceneDesc d = load_scene_file(test::source_dir() + "/examples/scenes/swatch_far.json");
+    ASSERT_EQ(d.film.width, 480);
+    d.film.height = d.film.height * c.width / d.film.width;
+    d.film.width = c.width;
+    d.film.spp = 1;
+    d.integrator.explicit_yarns = c.explicit_yarns;
+    for (MaterialDesc& m : d.materials) {
+      if (m.type != MaterialType::Knit) continue;
+      KnitMaterialParams p = m.knit.model->params();
+      ASSERT_EQ(p.table_min_cells, 0.25f);
+      p.mode = c.mode;
+      m.knit.model = std::make_shared<const KnitMaterial>(m.knit.model->surface().pattern(), p);
+    }
+    const RenderResult r = test::render_desc(d).result;
+    ASSERT_GT(r.stats.camera_resolves, uint64_t(c.width) * uint64_t(d.film.height) / 4);  // the swatch fills the view
+    const double share = double(r.stats.camera_table_footprints) / double(r.stats.camera_resolves);
+    std::printf("[examples] swatch_far.json at %dx%d, %s: %.1f%% of %llu camera hits on footprints the class table "
+                "would serve\n",
+                c.width, d.film.height, c.explicit_yarns ? "explicit yarns" : c.mode == KnitMode::NearField ? "near field" : "multi-scale",
+                100 * share, static_cast<unsigned long long>(r.stats.camera_resolves));
+    EXPECT_GE(share, c.min_share);
+    EXPECT_LE(share, c.max_share);
+    RenderReport rep;
+    rep.knit_materials = 1;
+    rep.resolves = r.stats.resolves;
+    rep.camera_resolves = r.stats.camera_resolves;
+    rep.camera_table_footprints = r.stats.camera_table_footprints;
+    const std::string text = rep.to_text();
+    EXPECT_EQ(text.find("\"mode\": \"multi_scale\"") != std::string::npos, share >= 0.1) << text;
+  }
+}
+
+// The hint's threshold, on counts made up for it: a tenth of the camera's
+// hits.
+TEST(Examples, NearFieldModeHintReadsTheCounts) {
+  RenderReport rep;
+  rep.knit_materials = 1;
+  rep.resolves = 2000;
+  rep.camera_resolves = 1000;
+  rep.camera_table_footprints = 99;
+  EXPECT_EQ(rep.to_text().find("multi_scale"), std::string::npos) << rep.to_text();
+  rep.camera_table_footprints = 100;
+  const std::string text = rep.to_text();
+  EXPECT_NE(text.find("  hint        10% of the camera's knit hits"), std::string::npos) << text;
+  EXPECT_NE(rep.to_json().find("\"camera_table_footprint_hits\": 100"), std::string::npos) << rep.to_json();
+}
+
 }  // namespace
 }  // namespace knit::render

@@ -204,6 +204,12 @@ class KnitMaterial {
   // near-field mode, or a multi-scale footprint below a stitch cell (and
   // outside the class table's sub-cells) with near_field_below_cell.
   bool near_field_at(const BaseHit& hit) const;
+  // In near-field mode, whether multi-scale mode would read this hit's
+  // footprint from its class table instead of marching it: a footprint of
+  // table_min_cells of a stitch cell or more in both directions (whole
+  // cells, or the sub-cells below a cell). The render report's hint counts
+  // them. Always false in multi-scale mode.
+  bool table_would_serve(const BaseHit& hit) const;
 
   // Fraction of light a shadow ray along ray_dir passes through the fabric
   // here: near-field 0 or 1 (a gap or a yarn), multi-scale p_delta.
