@@ -135,13 +135,13 @@ Rgb PathIntegrator::li(RayDifferential ray, Sampler& sampler, PathStats& stats) 
         if (depth == 0) {
           ++stats.camera_resolves;
           if (pt.table_would_serve) ++stats.camera_table_footprints;
-        }
-        if (depth == 0 && !pt.pass && si.yarn.segment > 0 && ray.cone_spread > 0) {
-          // A camera path's hit on a yarn tube: how many segments its pixel spans.
-          const float span = si.cone_width / si.yarn.segment;
-          size_t bin = 0;
-          while (bin < kTubeSpanEdges.size() && !(span < kTubeSpanEdges[bin])) ++bin;
-          ++stats.tube_spans[bin];
+          if (!pt.pass && si.yarn.segment > 0 && ray.cone_spread > 0) {
+            // A camera path's hit on a yarn tube: how many segments its pixel spans.
+            const float span = si.cone_width / si.yarn.segment;
+            size_t bin = 0;
+            while (bin < kTubeSpanEdges.size() && !(span < kTubeSpanEdges[bin])) ++bin;
+            ++stats.tube_spans[bin];
+          }
         }
       } else {
         // Where the interpolated normal puts the viewer on the other side than

@@ -358,7 +358,7 @@ KnitMaterial::Route KnitMaterial::route(const BaseHit& hit, Vec3& fx, Vec3& fy, 
 }
 
 bool KnitMaterial::sub_cells_reach(Vec3 e) const {
-  return table_ && table_->has_sub_cells() && e.x >= params_.table_min_cells && e.y >= params_.table_min_cells;
+  return table_ && table_->has_sub_cells() && spans_table_min_cells(e);
 }
 
 std::optional<FootprintTable::SubBox> KnitMaterial::sub_cells_serve(float x, float y, Vec3 e) const {
@@ -381,8 +381,7 @@ bool KnitMaterial::table_would_serve(const BaseHit& hit) const {
   if (params_.mode == KnitMode::MultiScale) return false;
   Vec3 fx, fy;
   footprint_axes(hit, fx, fy);
-  const Vec3 e = k::knit_footprint_extent(surface_.geom(), fx, fy);
-  return e.x >= params_.table_min_cells && e.y >= params_.table_min_cells;
+  return spans_table_min_cells(k::knit_footprint_extent(surface_.geom(), fx, fy));
 }
 
 KnitMaterial::HitRoute KnitMaterial::route_of(const BaseHit& hit, FootprintMemo* memo) const {

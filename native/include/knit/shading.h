@@ -334,6 +334,11 @@ class KnitMaterial {
   // Whether a footprint of `extent` cells is large enough for the sub-cells
   // (table_min_cells; the table has them): sub_cells_serve's first test.
   bool sub_cells_reach(Vec3 extent) const;
+  // Whether a footprint of `extent` cells spans table_min_cells in both
+  // directions (sub_cells_reach's and table_would_serve's test).
+  bool spans_table_min_cells(Vec3 extent) const {
+    return extent.x >= params_.table_min_cells && extent.y >= params_.table_min_cells;
+  }
   // Shades sh with the tabulated BSDF: the mix of the classes' hits
   // `slot_hits` seen from wi (colours already in sh; colour_w, the
   // footprint's shares of the palette's colours for a folded table, null
