@@ -25,6 +25,8 @@ sys.path.insert(0, os.environ.get("KNIT_PYTHON_DIR", os.path.join(ROOT, "build",
 
 import numpy as np  # noqa: E402
 
+from blender_env import blender_env  # noqa: E402
+
 import knitshade  # noqa: E402  (the module built by this project)
 
 PATTERN = "# seed stitch with a purl column\nK P K P\nP K P P\n"
@@ -58,9 +60,7 @@ def main():
         return 1
     with tempfile.TemporaryDirectory(prefix="knit-blender-") as out:
         np.savez(os.path.join(out, "reference.npz"), **ref)
-        env = dict(os.environ)
-        env["KNIT_PYTHON_DIR"] = os.path.dirname(knitshade.__file__)
-        env["KNIT_BLENDER_OUT"] = out
+        env = blender_env({"KNIT_PYTHON_DIR": os.path.dirname(knitshade.__file__), "KNIT_BLENDER_OUT": out})
         # --python-exit-code must come before --python: a failing script
         # then ends Blender with status 1 instead of 0.
         cmd = [blender, "-b", "--factory-startup", "--python-exit-code", "1", "--python",
