@@ -17,6 +17,8 @@
 #include "bsdf_attenuation.h"
 #include "bsdf_delta.h"
 #include "yarn_bsdf.h"
+#include "bsdf_cycles.h"
 #include "ply_profile.h"
+#include "yarn_frame.h"
 
 #endif /* KNIT_KERNEL_H */
