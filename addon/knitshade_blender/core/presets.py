@@ -144,7 +144,8 @@ def load_preset(identifier):
 YARN_WEIGHTS = {
     "fingering": {
         "name": "Fingering",
-        "description": "Thin sock and shawl yarn (UK 4 ply): fine, crisp stitches, about 28 stitches to 10 cm",
+        "description": "Thin sock and shawl yarn (UK 4 ply): fine, crisp stitches, "
+                       "about 28 stitches to 10 cm",
         "a": 1.5, "h": 4.0, "d": 0.8, "r": 0.50, "ply_count": 4, "stitches_per_10cm": 28.0,
     },
     "sport": {
@@ -154,7 +155,8 @@ YARN_WEIGHTS = {
     },
     "dk": {
         "name": "DK",
-        "description": "Double knitting (UK DK, 8 ply): everyday garments, about 22 stitches to 10 cm",
+        "description": "Double knitting (UK DK, 8 ply): everyday garments, "
+                       "about 22 stitches to 10 cm",
         "a": 1.5, "h": 4.0, "d": 1.0, "r": 0.62, "ply_count": 4, "stitches_per_10cm": 22.0,
     },
     "worsted": {
@@ -165,7 +167,8 @@ YARN_WEIGHTS = {
     },
     "chunky": {
         "name": "Chunky (bulky)",
-        "description": "Thick yarn (UK chunky, 12 ply): plump, deep stitches, about 14 stitches to 10 cm",
+        "description": "Thick yarn (UK chunky, 12 ply): plump, deep stitches, "
+                       "about 14 stitches to 10 cm",
         "a": 1.5, "h": 4.0, "d": 1.2, "r": 0.74, "ply_count": 2, "stitches_per_10cm": 14.0,
     },
 }
