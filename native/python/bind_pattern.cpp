@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "bindings.h"
+#include "knit/osl_source.h"
 #include "knit/pattern.h"
 
 namespace pb = pybind11;
@@ -161,6 +162,12 @@ void bind_pattern(pb::module_& m) {
       .def("__repr__", &repr)
       .def(pb::pickle([](const Pattern& p) { return p.to_text(); },
                       [](const std::string& text) { return Pattern::parse(text, "<pickle>"); }));
+  m.def("osl_source", &osl_source, pb::arg("pattern"), R"doc(
+The knit shader for Cycles (OSL) with `pattern` compiled in: one
+self-contained text (the shared kernel inlined, no #include), the same bytes
+for the same pattern; every other setting is a shader parameter
+(docs/shader.md). Raises ValueError for a pattern over 256 x 256 stitches or
+with a colour index over 7 (the shader's palette).)doc");
 }
 
 }  // namespace knit::py
