@@ -1,0 +1,57 @@
+"""The compiled `knitshade` module: imported here and nowhere else.
+
+The add-on's zip carries the module built for this platform's CPython 3.11
+(Blender 3.4 to 5.0) as native/knitshade.cpython-311-<platform>.so. It is
+optional: the material, the pattern editor, .knit import and export and the
+shader text are pure Python (core/). Where the module loads it adds what
+needs native code:
+
+- the library's own check of the stitch parameters, with its message
+  (tubes that would pass through each other are caught; without the module
+  only the basic checks of core.checks run);
+- explicit yarn geometry and the swatch preview (issue 54).
+
+A Blender whose Python is not 3.11 (5.1 and later embed 3.13) or an add-on
+zip built on another platform does not load it; the panel says so.
+"""
+import sys
+
+module = None
+error = ""
+
+try:
+    from . import knitshade as module  # noqa: F401  (the one import of the compiled module)
+except ImportError as e:  # not shipped, other Python, other platform, a missing library
+    module = None
+    error = str(e) or type(e).__name__
+except Exception as e:  # a broken build must not stop the add-on from registering
+    module = None
+    error = "%s: %s" % (type(e).__name__, e)
+
+AVAILABLE = module is not None
+
+# What the module adds, and how to get it: shown in the panel when it is missing.
+ADDS = ("the library's check of a, h, d, r (yarn tubes passing through each other)",
+        "explicit yarn geometry for Blenders without OSL, and the swatch preview")
+HOW_TO_GET = ("install the knitshade_blender zip built on this platform (cmake --build build "
+              "--target addon_zip) in a Blender whose Python is 3.11 (3.4 to 5.0)")
+
+
+def status():
+    """One line for the panel: the module's version, or why it is missing."""
+    if AVAILABLE:
+        return "Native module %s loaded" % getattr(module, "__version__", "?")
+    py = "%d.%d" % sys.version_info[:2]
+    if py != "3.11":
+        return "Native module not loaded: it is built for Python 3.11, this Blender runs %s" % py
+    return "Native module not loaded: %s" % error
+
+
+def check_stitch(a, h, d, r):
+    """Raise ValueError with the library's message when knit::StitchParams
+    refuses (a, h, d, r). Returns False without the module (nothing checked
+    here), True when it accepted them."""
+    if module is None:
+        return False
+    module.StitchParams(a=float(a), h=float(h), d=float(d), r=float(r))
+    return True
