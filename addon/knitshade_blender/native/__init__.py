@@ -18,15 +18,32 @@ import sys
 
 module = None
 error = ""
+shared_from = ""  # the other copy's name when an already loaded module is reused
 
-try:
-    from . import knitshade as module  # noqa: F401  (the one import of the compiled module)
-except ImportError as e:  # not shipped, other Python, other platform, a missing library
-    module = None
-    error = str(e) or type(e).__name__
-except Exception as e:  # a broken build must not stop the add-on from registering
-    module = None
-    error = "%s: %s" % (type(e).__name__, e)
+
+def _loaded_elsewhere():
+    """A `knitshade` module some other package already loaded in this process
+    (the add-on installed both as a legacy add-on and as an extension, or
+    the build tree's module on sys.path): pybind11 registers its types once
+    per process, so a second copy of the .so cannot load; reuse the first."""
+    for name, mod in list(sys.modules.items()):
+        if mod is None or name == __name__ + ".knitshade":
+            continue
+        if (name == "knitshade" or name.endswith(".native.knitshade")) and hasattr(mod, "StitchParams"):
+            return name, mod
+    return "", None
+
+
+shared_from, module = _loaded_elsewhere()
+if module is None:
+    try:
+        from . import knitshade as module  # noqa: F401  (the one import of the compiled module)
+    except ImportError as e:  # not shipped, other Python, other platform, a missing library
+        module = None
+        error = str(e) or type(e).__name__
+    except Exception as e:  # a broken build must not stop the add-on from registering
+        module = None
+        error = "%s: %s" % (type(e).__name__, e)
 
 AVAILABLE = module is not None
 
@@ -40,7 +57,8 @@ HOW_TO_GET = ("install the knitshade_blender zip built on this platform (cmake -
 def status():
     """One line for the panel: the module's version, or why it is missing."""
     if AVAILABLE:
-        return "Native module %s loaded" % getattr(module, "__version__", "?")
+        where = " (the copy %s loaded first)" % shared_from if shared_from else ""
+        return "Native module %s loaded%s" % (getattr(module, "__version__", "?"), where)
     py = "%d.%d" % sys.version_info[:2]
     if py != "3.11":
         return "Native module not loaded: it is built for Python 3.11, this Blender runs %s" % py
