@@ -20,5 +20,6 @@
 #include "bsdf_cycles.h"
 #include "ply_profile.h"
 #include "yarn_frame.h"
+#include "multiscale_frame.h"
 
 #endif /* KNIT_KERNEL_H */

@@ -240,6 +240,26 @@ def values_check():
     check(np.percentile(dn, 99) < 1e-3, f"yarn normal within 1e-3 at 99% of the hits "
                                          f"(99th percentile {np.percentile(dn, 99):.2e})")
 
+    # Multi-scale, stitches far smaller than a pixel: each pixel's coverage
+    # (1 - p_delta of its footprint) averages to the share of view rays
+    # that meet yarn, which the C++ CAPM gives over many random points.
+    sn.inputs["Mode"].default_value = 1
+    sn.inputs["UVScale"].default_value = 40.0 * UV_SCALE
+    for slot, name in zip("XYZ", PASSES[0]):
+        for link in list(comb.inputs[slot].links):
+            nt.links.remove(link)
+        nt.links.new(sources[name], comb.inputs[slot])
+    img = render_to_array(scene, os.path.join(OUT, "values_multiscale.exr"))
+    cov_ms = img[..., 2].ravel()[on_plane]
+    fine = knitshade.KnitSurface(pattern, knitshade.StitchParams(1.5, 4.0, 1.0, 0.65), 1.0)
+    rng = np.random.default_rng(5)
+    pts = rng.uniform(0.0, 200.0, size=(200000, 2))
+    share = np.asarray(fine.capm(pts[:, 0], pts[:, 1], view / np.linalg.norm(view))["hit"]).mean()
+    partial = ((cov_ms > 0.01) & (cov_ms < 0.99)).mean()
+    check(abs(cov_ms.mean() - share) < 0.01 and partial > 0.5,
+          f"multi-scale coverage {cov_ms.mean():.4f} over the plane against the C++ CAPM's hit share {share:.4f} "
+          f"(partial coverage at {partial * 100:.0f}% of the pixels)")
+
 
 def render_check():
     res = 96
