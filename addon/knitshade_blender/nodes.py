@@ -27,9 +27,11 @@ opening the file once in a Blender with OSL and the add-on compiles it
 
 Settings that are sockets (colours, a, h, d, r, UV scale, ...) live on the
 group node's inputs in the material: changing one never touches the
-shader. Changing the pattern writes the shader text once per edit and
-compiles it (at once from scripts; from the editor's buttons after a short
-pause, so a run of clicks compiles once).
+shader. Changing the pattern writes the shader text once per edit; the
+operators compile it after a short pause (a run of clicks compiles once) or
+before a render or a save, whichever comes first (background scripts have
+no timers: their renders and saves compile it); the Python API compiles at
+once.
 """
 import hashlib
 
@@ -435,13 +437,19 @@ def _run_pending():
 
 
 def schedule_compile(tree):
-    """Compile the group after COMPILE_DELAY seconds without further edits."""
+    """Compile the group after COMPILE_DELAY seconds without further edits
+    (or at the next render or save)."""
     if not compat.with_osl():
         return
     _pending.add(tree.name)
     if bpy.app.timers.is_registered(_run_pending):
         bpy.app.timers.unregister(_run_pending)
     bpy.app.timers.register(_run_pending, first_interval=COMPILE_DELAY)
+
+
+def pending():
+    """Names of the groups waiting to be compiled."""
+    return sorted(_pending)
 
 
 def flush_pending():
@@ -572,6 +580,14 @@ def _on_load_post(*_args):
 
 
 @persistent
+def _on_render_or_save(*_args):
+    """Compile what waits for a pause before a render reads the bytecode or a
+    save writes it (timers never run in background scripts)."""
+    if _pending:
+        flush_pending()
+
+
+@persistent
 def _on_undo_redo(*_args):
     """After an undo the text may be older than the bytecode: compile it
     again after a pause (cheap when nothing changed)."""
@@ -589,6 +605,9 @@ _HANDLERS = (
     ("load_post", _on_load_post),
     ("undo_post", _on_undo_redo),
     ("redo_post", _on_undo_redo),
+    ("render_init", _on_render_or_save),
+    ("render_pre", _on_render_or_save),
+    ("save_pre", _on_render_or_save),
 )
 
 

@@ -113,9 +113,9 @@ def _clear_message(mat):
 # ---- pattern edits -------------------------------------------------------
 
 class _PatternEdit(_Target):
-    """An edit of the pattern: one undo step; from a panel button the shader
-    compiles after a short pause (a run of clicks compiles once), from a
-    script at once."""
+    """An edit of the pattern: one undo step. The shader text is written at
+    once; it compiles after a short pause (a run of clicks compiles once),
+    or before a render or a save, whichever comes first."""
 
     bl_options = {"REGISTER", "UNDO"}
     what = "edit"
@@ -140,11 +140,11 @@ class _PatternEdit(_Target):
             new = self.edit(old, context)
         except (kpattern.PatternError, ValueError) as e:
             return self.fail("%s: %s refused: %s" % (mat.name, self.what, e), mat)
-        if new is None or new == old:
+        if new is None or new == old:  # nothing to change (and no undo step)
+            _clear_message(mat)
             return {"CANCELLED"}
         try:
-            nodes.set_pattern(tree, new, compile="later" if getattr(self, "_from_ui", False) else "now",
-                              report=self.report)
+            nodes.set_pattern(tree, new, compile="later", report=self.report)
         except (kshader.ShaderError, nodes.KnitError) as e:
             return self.fail("%s: %s refused: %s" % (mat.name, self.what, e), mat)
         _clear_message(mat)
@@ -262,8 +262,8 @@ class KNITSHADE_OT_resize(_PatternEdit, bpy.types.Operator):
     bl_label = "Resize Pattern"
     what = "resize"
 
-    rows: IntProperty(name="Rows", min=1, max=kshader.MAX_SIDE, default=4)
-    cols: IntProperty(name="Columns", min=1, max=kshader.MAX_SIDE, default=4)
+    rows: IntProperty(name="Rows", min=1, max=kpattern.MAX_ROWS, soft_max=kshader.MAX_SIDE, default=4)
+    cols: IntProperty(name="Columns", min=1, max=kpattern.MAX_COLS, soft_max=kshader.MAX_SIDE, default=4)
 
     def invoke(self, context, _event):
         try:
@@ -655,7 +655,7 @@ class KNITSHADE_OT_add_material(bpy.types.Operator):
         try:
             values = settings.check(values, lambda n: defaults[n])
         except ValueError as e:
-            self.report({"ERROR"}, "Add Knit Fabric: %s refused: %s" % (settings.describe(values), e))
+            self.report({"ERROR"}, "Add Knit Fabric: refused: %s" % e)
             return {"CANCELLED"}
         msgs = []
 
@@ -764,12 +764,12 @@ class KNITSHADE_OT_refresh_curvature(bpy.types.Operator):
             self.report({"ERROR"}, "Refresh Curvature: no object selected")
             return {"CANCELLED"}
         done, problems = refresh_curvature(objs)
+        if not done:
+            why = "; ".join(problems) or "%s: not a mesh" % ", ".join(o.name for o in objs)
+            self.report({"ERROR"}, "Refresh Curvature: " + why)
+            return {"CANCELLED"}
         for p in problems:
             self.report({"WARNING"}, p)
-        if not done:
-            if not problems:
-                self.report({"ERROR"}, "Refresh Curvature: %s: not a mesh" % ", ".join(o.name for o in objs))
-            return {"CANCELLED"}
         self.report({"INFO"}, "Curvature refreshed on %s" % ", ".join(done))
         return {"FINISHED"}
 

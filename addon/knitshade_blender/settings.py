@@ -62,16 +62,19 @@ def resolve(changes):
 
 def check(changes, current):
     """The changes, checked and converted ({name: value}); ValueError with
-    the first refusal (the library's words for a, h, d, r). `current(name)`
-    gives a setting's value before the change."""
-    out = {}
-    for name, value in changes.items():
-        out[name] = checks.value(nodes.param(name), value)
-    if any(n in out for n in STITCH):
-        a, h, d, r = (out[n] if n in out else current(n) for n in STITCH)
+    the first refusal. a, h, d, r are checked first, together, in the
+    library's words (its StitchParams where the native module loads, else
+    core.checks.stitch); then every value against its parameter's range.
+    `current(name)` gives a setting's value before the change."""
+    if any(n in changes for n in STITCH):
+        a, h, d, r = (changes[n] if n in changes else current(n) for n in STITCH)
+        try:
+            a, h, d, r = (float(x) for x in (a, h, d, r))
+        except (TypeError, ValueError):
+            raise ValueError("a, h, d, r must be numbers, got %r, %r, %r, %r" % (a, h, d, r)) from None
         checks.stitch(a, h, d, r)
         native.check_stitch(a, h, d, r)
-    return out
+    return {name: checks.value(nodes.param(name), value) for name, value in changes.items()}
 
 
 def apply(material, changes, node=None):
