@@ -9,6 +9,7 @@ bpy.app.version itself.
 | a node group's sockets        | tree.inputs / tree.outputs | tree.interface.new_socket()        |
 | Add > Shader menu             | NODE_MT_category_SH_NEW_SHADER | NODE_MT_category_shader_shader |
 | Material.use_nodes            | must be set                | deprecated in 5.0 (always nodes)   |
+| group socket tooltip          | 63 bytes                   | any length                         |
 | OSL in Cycles                 | _cycles.with_osl (Debian's 3.4: False) | same; PyPI's bpy: True |
 | oslquery (Cycles' osl.py)     | on sys.path                | PyPI's bpy: under resource_path("LOCAL")/python/lib/python3.11/site-packages |
 """
@@ -38,6 +39,20 @@ SOCKET_TYPES = {
 
 # ---- node groups ---------------------------------------------------------
 
+# 3.x keeps a group socket's tooltip in 64 bytes; 4.0 and later in a string.
+DESCRIPTION_MAX = None if IS_4_0 else 63
+
+
+def short_description(text):
+    """The tooltip as this Blender stores it: whole, or cut at a word to fit."""
+    if DESCRIPTION_MAX is None or len(text.encode("utf-8")) <= DESCRIPTION_MAX:
+        return text
+    cut = text[:DESCRIPTION_MAX - 3]
+    if " " in cut:
+        cut = cut[:cut.rindex(" ")]
+    return cut.rstrip(" ,;:") + "..."
+
+
 def new_group_socket(tree, in_out, socket_type, name, description=""):
     """A new input ('INPUT') or output ('OUTPUT') socket of node group `tree`;
     returns the interface socket (identifier, default_value, min_value, ...)."""
@@ -46,7 +61,7 @@ def new_group_socket(tree, in_out, socket_type, name, description=""):
                                          socket_type=socket_type)
     sockets = tree.inputs if in_out == "INPUT" else tree.outputs
     sock = sockets.new(socket_type, name)
-    sock.description = description
+    sock.description = short_description(description)
     return sock
 
 
