@@ -259,4 +259,48 @@ KNIT_FN KnitAggregate knit_aggregate(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes)
   return a;
 }
 
+/* ---- A footprint from ray differentials of known size only ---------------
+ * Cycles gives a shader its UV derivatives from a ray cone: two tangent
+ * vectors of the cone's width at the hit, in directions of no meaning
+ * (differential_dudv_compact). Their lengths say how large a pixel is on the
+ * surface across the view, not how it is stretched along it. The footprint
+ * is then taken as isotropic, of side L = uv_scale (len_x + len_y) / 2, and
+ * stretched by 1 / cos(theta) along the view direction's projection on the
+ * surface (theta the view's angle to the base normal, the cosine clamped at
+ * KNIT_FOOTPRINT_MIN_COS so that grazing views do not get footprints of
+ * thousands of cells).
+ *   len_x, len_y  lengths of the two UV differentials, |(du/dx, dv/dx)| and
+ *                 |(du/dy, dv/dy)| (UV units)
+ *   view_local    the view (or ray) direction in the base frame: x along +u,
+ *                 y along +v, z the normal; sign and length do not matter
+ *   uv_scale      pattern units per UV unit
+ * Returns fx (stretched, along the view's projection) and fy (across it), in
+ * pattern units (KZ 0): knit_aggregate's footprint vectors. A view along the
+ * normal gives fx along x. Used by the OSL shader and by the native
+ * renderer's "cycles" option (docs/cycles.md). */
+#define KNIT_FOOTPRINT_MIN_COS KF(0.1)
+
+KNIT_STRUCT(KFootprintAxes)
+  kvec3 fx;
+  kvec3 fy;
+KNIT_STRUCT_END(KFootprintAxes)
+
+KNIT_FN KFootprintAxes knit_footprint_isotropic(float len_x, float len_y, kvec3 view_local, float uv_scale) {
+  KFootprintAxes f;
+  float side = KF(0.5) * uv_scale * (k_fabs(len_x) + k_fabs(len_y));
+  float vl = kv3_len(view_local);
+  float t = k_sqrt(KX(view_local) * KX(view_local) + KY(view_local) * KY(view_local));
+  float c = vl > KF(0.0) ? k_fabs(KZ(view_local)) / vl : KF(1.0);
+  float ex = KF(1.0), ey = KF(0.0);
+  float along;
+  if (t > KF(1.0e-6) * vl) {
+    ex = KX(view_local) / t;
+    ey = KY(view_local) / t;
+  }
+  along = side / k_fmax(c, KNIT_FOOTPRINT_MIN_COS);
+  f.fx = kv3(along * ex, along * ey, KF(0.0));
+  f.fy = kv3(-side * ey, side * ex, KF(0.0));
+  return f;
+}
+
 #endif /* KNIT_KERNEL_MULTISCALE_H */
