@@ -18,6 +18,7 @@ test_pkgs=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev
   blender xvfb xauth
+  python3-venv libvulkan1
 )
 
 want=("${build_pkgs[@]}")

@@ -23,7 +23,8 @@ IS_4_0 = VERSION >= (4, 0, 0)
 IS_4_2 = VERSION >= (4, 2, 0)
 IS_5_0 = VERSION >= (5, 0, 0)
 
-# Group sockets by the kind of a shader parameter or output (core.shader).
+# Sockets by the kind of a shader parameter or output (core.shader), as
+# Cycles makes them on a compiled Script node.
 SOCKET_TYPES = {
     "float": "NodeSocketFloat",
     "int": "NodeSocketInt",
@@ -35,6 +36,13 @@ SOCKET_TYPES = {
     "normal": "NodeSocketVector",
     "closure": "NodeSocketShader",
 }
+
+# The node group's inputs: the same, but an on/off setting is an integer
+# (0 or 1). In Cycles 5.0.1 a Boolean group input linked into a Script node's
+# Boolean input aborts the render (std::bad_variant_access in the shader
+# sync); an integer input linked there renders, and its 0/1 reaches the
+# shader (tests/blender/test_render.py renders through such a group).
+GROUP_SOCKET_TYPES = dict(SOCKET_TYPES, bool="NodeSocketInt")
 
 
 # ---- node groups ---------------------------------------------------------
@@ -110,7 +118,7 @@ def with_osl():
     return bool(getattr(_cycles, "with_osl", False)) and hasattr(_cycles, "osl_compile")
 
 
-def _ensure_oslquery_importable():
+def ensure_oslquery_importable():
     """Cycles' osl.py does `import oslquery`. Blender puts it on sys.path; the
     `bpy` module from PyPI keeps it under its LOCAL resource folder, which
     is not on sys.path there."""
@@ -134,7 +142,7 @@ def compile_script_node(node, report):
     receives Cycles' messages. Returns True on success; False without OSL."""
     if not with_osl():
         return False
-    _ensure_oslquery_importable()
+    ensure_oslquery_importable()
     from cycles import osl  # the Cycles add-on, enabled wherever Cycles is
     return bool(osl.update_script_node(node, report))
 

@@ -27,11 +27,11 @@ opening the file once in a Blender with OSL and the add-on compiles it
 
 Settings that are sockets (colours, a, h, d, r, UV scale, ...) live on the
 group node's inputs in the material: changing one never touches the
-shader. Changing the pattern writes the shader text once per edit; the
-operators compile it after a short pause (a run of clicks compiles once) or
-before a render or a save, whichever comes first (background scripts have
-no timers: their renders and saves compile it); the Python API compiles at
-once.
+shader. Changing the pattern writes the shader text once per edit. In the
+interface the operators compile it after a short pause (a run of clicks
+compiles once; a save in the pause compiles first); in background
+Blender (scripts, farms: no timers run there) and from the Python API it
+compiles at once.
 """
 import hashlib
 
@@ -197,6 +197,8 @@ def set_pattern(tree, pat, compile="now", report=None):
     if compile == "now":
         return ensure_compiled(tree, report)
     if compile == "later":
+        if bpy.app.background:  # no timers: now, or never before a render
+            return ensure_compiled(tree, report)
         schedule_compile(tree)
     return None
 
@@ -204,10 +206,12 @@ def set_pattern(tree, pat, compile="now", report=None):
 # ---- building the group --------------------------------------------------
 
 def _interface_defaults(sock, p, value):
-    if p.kind in ("float", "int", "enum"):
+    if p.kind in ("float", "int", "enum", "bool"):
         if p.kind == "enum":
             values = [it[2] for it in (p.items or ())] or [0]
             lo, hi = min(values), max(values)
+        elif p.kind == "bool":
+            lo, hi = 0, 1
         else:
             lo, hi = p.min, p.max
         if lo is not None:
@@ -218,9 +222,7 @@ def _interface_defaults(sock, p, value):
         sock.default_value = tuple(value)[:3] + (1.0,)
     elif p.kind in ("point", "vector"):
         sock.default_value = tuple(value)
-    elif p.kind == "bool":
-        sock.default_value = bool(value)
-    elif p.kind in ("int", "enum"):
+    elif p.kind in ("int", "enum", "bool"):  # (a bool is a 0/1 integer input: compat.GROUP_SOCKET_TYPES)
         sock.default_value = int(value)
     else:
         sock.default_value = float(value)
@@ -232,7 +234,7 @@ def _make_interface(tree, values):
         s = compat.new_group_socket(tree, "OUTPUT", compat.SOCKET_TYPES[kind], name, description)
         ids["out:" + name] = s.identifier
     for p in params():
-        s = compat.new_group_socket(tree, "INPUT", compat.SOCKET_TYPES[p.kind], p.label, p.description)
+        s = compat.new_group_socket(tree, "INPUT", compat.GROUP_SOCKET_TYPES[p.kind], p.label, p.description)
         _interface_defaults(s, p, values.get(p.name, p.default))
         ids[p.name] = s.identifier
     tree[SOCKETS_KEY] = ids
@@ -353,7 +355,8 @@ def repair_group(tree):
             added.append(name)
     for p in params():
         if ids.get(p.name) not in have_in:
-            s = compat.new_group_socket(tree, "INPUT", compat.SOCKET_TYPES[p.kind], p.label, p.description)
+            s = compat.new_group_socket(tree, "INPUT", compat.GROUP_SOCKET_TYPES[p.kind], p.label,
+                                        p.description)
             _interface_defaults(s, p, vals.get(p.name, p.default))
             ids[p.name] = s.identifier
             added.append(p.name)
@@ -499,9 +502,9 @@ def set_value(node, name, value):
         sock.default_value = tuple(value)[:3] + (1.0,)
     elif p.kind in ("point", "vector"):
         sock.default_value = tuple(value)
-    elif p.kind == "bool":
+    elif p.kind == "bool" and sock.bl_idname == "NodeSocketBool":
         sock.default_value = bool(value)
-    elif p.kind in ("int", "enum"):
+    elif p.kind in ("int", "enum", "bool"):
         sock.default_value = int(value)
     else:
         sock.default_value = float(value)
@@ -580,11 +583,19 @@ def _on_load_post(*_args):
 
 
 @persistent
-def _on_render_or_save(*_args):
-    """Compile what waits for a pause before a render reads the bytecode or a
-    save writes it (timers never run in background scripts)."""
+def _on_save(*_args):
+    """Compile what waits for a pause before a save writes the bytecode."""
     if _pending:
         flush_pending()
+
+
+@persistent
+def _on_render(*_args):
+    """A render that starts within the pause after an edit (F12 at once)
+    renders the previous compile: compiling here, with the render's
+    depsgraph being made, crashes Cycles."""
+    for name in _pending:
+        print("Knit Fabric: %s was edited just before the render, which uses its previous shader" % name)
 
 
 @persistent
@@ -605,9 +616,8 @@ _HANDLERS = (
     ("load_post", _on_load_post),
     ("undo_post", _on_undo_redo),
     ("redo_post", _on_undo_redo),
-    ("render_init", _on_render_or_save),
-    ("render_pre", _on_render_or_save),
-    ("save_pre", _on_render_or_save),
+    ("render_init", _on_render),
+    ("save_pre", _on_save),
 )
 
 
@@ -619,6 +629,10 @@ def add_node_menu(self, context):
 
 
 def register():
+    if compat.with_osl():
+        # (Cycles itself compiles a Script node whose text or mode changes,
+        # and needs oslquery for it: PyPI's bpy keeps it off sys.path)
+        compat.ensure_oslquery_importable()
     for name, fn in _HANDLERS:
         handlers = getattr(bpy.app.handlers, name)
         if fn not in handlers:

@@ -114,8 +114,8 @@ def _clear_message(mat):
 
 class _PatternEdit(_Target):
     """An edit of the pattern: one undo step. The shader text is written at
-    once; it compiles after a short pause (a run of clicks compiles once),
-    or before a render or a save, whichever comes first."""
+    once; in the interface it compiles after a short pause (a run of clicks
+    compiles once), in background Blender at once (nodes.set_pattern)."""
 
     bl_options = {"REGISTER", "UNDO"}
     what = "edit"

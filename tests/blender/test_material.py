@@ -136,7 +136,8 @@ def main():
     T.raises(ValueError, api.set_parameters, mat, r=3.0, contains="makes yarn tubes pass through each other")
     T.raises(KeyError, api.set_parameters, mat, wool=1)
 
-    # pattern edits: the text once per edit, one compile for a run of edits
+    # pattern edits: the text once per edit and, in background Blender (no
+    # timers), one compile per edit where there is OSL
     writes = []
     real_set = nodes.set_pattern
 
@@ -154,20 +155,27 @@ def main():
     T.equal(len(writes), 3, "shader texts written for 3 edits")
     T.equal(script.script.as_string(), addon.core.shader.osl_source(api.get_pattern(mat)),
             "the text after the edits")
+    T.equal(len(calls), 3 if osl else 0, "compiles for 3 edits in background Blender")
     if osl:
+        T.check(script.bytecode_hash != hash0 and not nodes.needs_compile(tree), "the bytecode after the edits")
+        # the interface's pause: compiles asked for in a row make one
+        api.set_pattern(mat, "K")
+        del calls[:]
+        script.script.from_string(addon.core.shader.osl_source(api.get_pattern(mat)) + "\n// edited\n")
+        for _ in range(3):
+            nodes.schedule_compile(tree)
         T.equal(nodes.pending(), [tree.name], "groups waiting to compile")
         nodes.flush_pending()
-        T.equal(len(calls), 1, "compiles for 3 edits in a row")
-        T.check(script.bytecode_hash != hash0 and not nodes.needs_compile(tree), "the bytecode after the edits")
-    else:
-        T.equal(calls, [], "compiles without OSL")
+        T.equal(len(calls), 1, "compiles for 3 requests in a pause")
+        T.check(not nodes.needs_compile(tree), "still stale after the pause's compile")
+        api.set_pattern(mat, "F F F P\nP K P K\nK K P P\ncolors:\n0 0 1 1\n1 1 0 0\n0 1 0 1\n")
     restore()
     T.raises(addon.core.pattern.PatternError, api.set_pattern, mat, "K P\nP", contains="<Knit>:2:2:")
     T.raises(addon.core.shader.ShaderError, api.set_pattern, mat, "K" * 257, contains="at most 256 x 256")
     T.equal(api.get_pattern(mat).to_storage().split("\n")[0], "FFFP", "pattern after refused set_pattern")
     api.set_pattern(mat, PATTERN)
     check_structure(addon, mat)
-    T.say("socket changes: no new shader; 3 pattern edits: 3 texts, %d compile(s)" % len(calls))
+    T.say("socket changes: no new shader; 3 pattern edits: 3 texts and as many compiles")
 
     # save, reload
     params = api.get_parameters(mat)
