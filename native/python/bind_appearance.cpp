@@ -596,7 +596,7 @@ KnitMaterial make_material(const Pattern& pattern, const StitchParams& stitch, :
                            ::py::object ply, const std::string& mode, bool capm, bool ply_detail,
                            int footprint_points, bool footprint_table, double table_min_cells,
                            bool table_bsdf, bool table_fold, bool self_shadowing, bool near_field_below_cell, double uv_scale,
-                           int max_steps, double max_segment, double max_bend) {
+                           int max_steps, double max_segment, double max_bend, const std::string& bsdf_model) {
   KnitMaterialParams mp;
   mp.stitch = stitch;
   if (bsdf.is_none()) {
@@ -629,6 +629,13 @@ KnitMaterial make_material(const Pattern& pattern, const StitchParams& stitch, :
     mp.mode = KnitMode::MultiScale;
   } else {
     throw ::py::value_error("mode = '" + mode + "': must be 'near_field' or 'multi_scale'");
+  }
+  if (bsdf_model == "exact") {
+    mp.bsdf_model = KnitBsdfModel::Exact;
+  } else if (bsdf_model == "cycles") {
+    mp.bsdf_model = KnitBsdfModel::Cycles;
+  } else {
+    throw ::py::value_error("bsdf_model = '" + bsdf_model + "': must be 'exact' or 'cycles'");
   }
   mp.capm = capm;
   mp.ply_detail = ply_detail;
@@ -1209,7 +1216,7 @@ KnitMaterial(pattern, stitch=StitchParams(), bsdf=None, ply=None,
 mode='near_field', capm=True, ply_detail=True, footprint_points=4,
 footprint_table=True, table_min_cells=0.25, table_bsdf=True, table_fold=True, self_shadowing=True,
 near_field_below_cell=True, uv_scale=40.0, max_steps=32, max_segment=6.2832,
-max_bend=0.05)
+max_bend=0.05, bsdf_model='exact')
 
 bsdf: a YarnBSDF or a dict of its keyword arguments (None: defaults); it
 needs a colour for every colour index the pattern uses. ply: a PlyProfile or
@@ -1236,7 +1243,10 @@ footprint below a stitch cell in either direction is shaded as the near
 field at the hit (C++: KnitMaterial::near_field_at); False: the marched
 aggregate of its points. capm=False: no parallax, the
 height query at the hit's (u, v). uv_scale: pattern units per UV unit. max_steps, max_segment,
-max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
+max_bend: CAPM options. bsdf_model: 'exact', or 'cycles' as the OSL shader renders
+it in Cycles (docs/cycles.md), which takes footprint_table, table_bsdf,
+near_field_below_cell and self_shadowing as False. Invalid values raise
+ValueError naming the field.)doc");
   knit_material
       .def(::py::init(&make_material), ::py::arg("pattern"), ::py::arg("stitch") = StitchParams{},
            ::py::kw_only(), ::py::arg("bsdf") = ::py::none(), ::py::arg("ply") = ::py::none(),
@@ -1246,7 +1256,7 @@ max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
            ::py::arg("table_bsdf") = true, ::py::arg("table_fold") = true,
            ::py::arg("self_shadowing") = true,
            ::py::arg("near_field_below_cell") = true, ::py::arg("uv_scale") = 40.0, ::py::arg("max_steps") = 32,
-           ::py::arg("max_segment") = 6.2832, ::py::arg("max_bend") = 0.05)
+           ::py::arg("max_segment") = 6.2832, ::py::arg("max_bend") = 0.05, ::py::arg("bsdf_model") = "exact")
       .def_property_readonly("pattern",
                              [](const KnitMaterial& km) { return km.surface().pattern(); })
       .def_property_readonly("stitch", [](const KnitMaterial& km) { return km.params().stitch; })
@@ -1275,6 +1285,12 @@ max_bend: CAPM options. Invalid values raise ValueError naming the field.)doc");
                              [](const KnitMaterial& km) { return km.params().near_field_below_cell; })
       .def_property_readonly("uv_scale",
                              [](const KnitMaterial& km) { return km.params().uv_scale; })
+      .def_property_readonly(
+          "bsdf_model",
+          [](const KnitMaterial& km) {
+            return std::string(km.params().bsdf_model == KnitBsdfModel::Cycles ? "cycles" : "exact");
+          },
+          "'exact', or 'cycles': as the OSL shader renders it in Cycles (docs/cycles.md).")
       .def_property_readonly(
           "shell_top", [](const KnitMaterial& km) { return km.surface().shell_top(); },
           "Height of the shell top (the base mesh) above the yarn centre plane, pattern "

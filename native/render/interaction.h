@@ -32,6 +32,11 @@ struct YarnShading {
   // the body colours.
   const knit::TableBsdf* table = nullptr;
   knit::TableBsdf::Mix mix;
+  // The knit model with bsdf_model Cycles: shaded with the smooth lobes of
+  // Cycles' closures (bsdf_cycles.h), their weights fixed at this hit's
+  // view direction; the transparent() lobe was the resolve's pass-through.
+  bool cycles = false;
+  knit::k::KYarnCycles cyc{};
 };
 
 // Screen-space footprint of a hit (ray differentials, Igehy 1999): how the

@@ -87,6 +87,7 @@ KnitModelMaterial::KnitModelMaterial(const KnitDesc& desc, std::shared_ptr<const
   min_footprint_ = 1e-4f * model_->surface().cell_width();
   footprint_scale_ = desc.footprint_scale;
   centre_at_pixel_ = desc.footprint_centre == FootprintCentre::Pixel;
+  cycles_ = model_->params().bsdf_model == knit::KnitBsdfModel::Cycles;
   // A stretch worth a warning: over 1% of the UV area, or by 1.5 or more
   // anywhere. (A puffed cushion's corners, 0.1% of its UV area stretched by
   // at most 17%, do not show; a warning there only teaches users to ignore
@@ -169,6 +170,7 @@ static Vec2 footprint_shift(const knit::KnitMaterial& model, const knit::KnitMat
 PassThrough KnitModelMaterial::resolve(SurfaceInteraction& si, const RayDifferential& ray, Sampler& sampler) const {
   PassThrough pt;
   knit::BaseHit hit = base_hit(si, ray.diff_scale, {ray.pixel_dx, ray.pixel_dy});
+  if (cycles_) cycles_footprint(si, ray.d, hit);
   const knit::KnitMaterial& model = cone_footprint(si, ray.d, hit) ? *model_ : model_for(hit);
   // (once for the shift and the shading; with the pixel's memo where the
   // footprint is the pixel's)
@@ -192,7 +194,26 @@ PassThrough KnitModelMaterial::resolve(SurfaceInteraction& si, const RayDifferen
     return pt;
   }
   apply_shade(si, sh, model);
-  if (!si.yarn.active) pt.pass = true;  // never seen; keeps a broken frame from producing NaNs
+  if (!si.yarn.active) {
+    pt.pass = true;  // never seen; keeps a broken frame from producing NaNs
+    return pt;
+  }
+  if (cycles_) {
+    // Cycles' closures: the transparent() one (through, a delta) goes on as
+    // a pass-through with the probability the mixture would pick it, the
+    // others shade the hit (YarnShadedMaterial, the smooth lobes alone).
+    si.yarn.cycles = true;
+    si.yarn.cyc = knit::k::yarn_cycles_make(si.yarn.bsdf, to_kvec(si.shading.to_local(-ray.d)));
+    const float p3 = si.yarn.cyc.p3;
+    if (p3 > 0) {
+      if (sampler.get1d() < p3) {
+        pt.pass = true;
+        pt.weight = Rgb(si.yarn.cyc.w.through / p3);
+        return pt;
+      }
+      pt.weight = Rgb(1.0f / (1.0f - p3));
+    }
+  }
   return pt;
 }
 
@@ -215,6 +236,7 @@ void KnitModelMaterial::apply_shade(SurfaceInteraction& si, const knit::KnitShad
   }
   si.yarn.table = sh.table_bsdf;
   if (sh.table_bsdf) si.yarn.mix = sh.mix;
+  si.yarn.cycles = false;
   si.yarn.in_shell = sh.in_shell;
   si.yarn.from_back = sh.from_back;
   si.yarn.shell_p = sh.p_yarn;
@@ -239,6 +261,33 @@ bool KnitModelMaterial::cone_footprint(const SurfaceInteraction& si, Vec3 dir, k
   hit.dvdx = fxy / us;
   hit.dudy = fyx / us;
   hit.dvdy = fyy / us;
+  return true;
+}
+
+bool KnitModelMaterial::cycles_footprint(const SurfaceInteraction& si, Vec3 dir, knit::BaseHit& hit) const {
+  if (!point_model_ || !(si.cone_width > 0)) return false;
+  // Cycles' UV differentials: two tangent vectors of the cone's width, UV
+  // lengths w S / uv_scale on a mesh whose |dP/du| and |dP/dv| agree (S its
+  // pattern units per world unit).
+  const float us = model_->params().uv_scale;
+  const float len = si.cone_width * footprint_scale_ * hit.pattern_per_world / us;
+  const knit::k::KFootprintAxes f =
+      knit::k::knit_footprint_isotropic(len, len, to_kvec(si.shading.to_local(dir)), us);
+  hit.dudx = f.fx.x / us;
+  hit.dvdx = f.fx.y / us;
+  hit.dudy = f.fy.x / us;
+  hit.dvdy = f.fy.y / us;
+  return true;
+}
+
+bool KnitModelMaterial::cycles_mixture(const knit::KnitShade& sh, const knit::KnitMaterial& model, Vec3 wo,
+                                       knit::k::KYarnCycles& out) {
+  // The frame apply_shade gives the hit.
+  const Vec3 n = from_kvec(sh.sn);
+  const float ln = length(n);
+  if (!(ln > 0.5f) || !std::isfinite(ln)) return false;
+  const Frame f = Frame::from_normal_tangent(n / ln, from_kvec(sh.st));
+  out = knit::k::yarn_cycles_make(model.kernel_bsdf(sh), to_kvec(f.to_local(wo)));
   return true;
 }
 
@@ -283,6 +332,21 @@ bool KnitModelMaterial::bounce_inside(SurfaceInteraction& si, Vec3 wi) const {
 
 Rgb KnitModelMaterial::transmittance(const SurfaceInteraction& si, Vec3 w, Sampler& sampler) const {
   knit::BaseHit hit = base_hit(si);
+  if (cycles_) {
+    // What a shadow ray through the fabric gets in Cycles: the shader's
+    // transparent() weight, p_delta + (1 - p_delta) through (1 in a gap), as
+    // resolve() passes camera and bounce rays.
+    cycles_footprint(si, w, hit);
+    const knit::KnitMaterial& model = model_for(hit);
+    const knit::KnitMaterial::HitRoute route = model.route_of(hit);
+    const Vec2 shift = footprint_shift(model, route, sampler);
+    const knit::KnitShade sh = model.shade(hit, route, to_kvec(w), frame_.get(), {shift.x, shift.y});
+    if (sh.pass_through) return Rgb(1.0f);
+    knit::k::KYarnCycles c;
+    const float p = sh.point.p_delta;
+    if (!cycles_mixture(sh, model, -w, c)) return Rgb(1.0f);  // (as resolve() passes it)
+    return Rgb(p + (1 - p) * c.w.through);
+  }
   const knit::KnitMaterial& model = cone_footprint(si, w, hit) ? *model_ : model_for(hit);
   const knit::KnitMaterial::HitRoute route = model.route_of(hit);
   const Vec2 shift = footprint_shift(model, route, sampler);

@@ -18,6 +18,9 @@
 // p_delta). In multi-scale mode, hits without a ray footprint (shadow rays,
 // rays after a diffuse bounce) use the near-field model: the aggregate over
 // a point is that point's CAPM hit, so one march replaces N identical ones.
+// With bsdf_model Cycles the hit is shaded as the OSL shader shades it in
+// Cycles (docs/cycles.md): the smooth closures of bsdf_cycles.h, the
+// transparent one as a pass-through, footprints from the ray's cone.
 // docs/renderer.md#the-knit-model.
 #pragma once
 
@@ -75,6 +78,12 @@ class KnitModelMaterial final : public YarnShadedMaterial {
   // camera sample `pixel_offset` pixels from it; KnitDesc::footprint_centre).
   knit::BaseHit base_hit(const SurfaceInteraction& si, float diff_scale = 1.0f, Vec2 pixel_offset = {}) const;
   const knit::FrameProvider* frame_provider() const { return frame_.get(); }
+  // bsdf_model Cycles, multi-scale: the footprint the OSL shader builds from
+  // Cycles' ray differentials (knit::k::knit_footprint_isotropic), from the
+  // ray's cone width at the hit (Cycles' compact dP) and the ray direction
+  // `dir`, put into `hit`; false (hit unchanged) when the cone is unknown or
+  // the material is not multi-scale.
+  bool cycles_footprint(const SurfaceInteraction& si, Vec3 dir, knit::BaseHit& hit) const;
   // Renderer-side tables for this mesh (per-triangle data, the MeshFrame).
   size_t binding_bytes() const;
 
@@ -93,12 +102,18 @@ class KnitModelMaterial final : public YarnShadedMaterial {
   // `hit`, when it covers a stitch cell or more in both directions (the
   // class table's domain). False otherwise (the hit is then a point).
   bool cone_footprint(const SurfaceInteraction& si, Vec3 dir, knit::BaseHit& hit) const;
+  // bsdf_model Cycles: the mixture of Cycles' closures for a shade seen from
+  // wo (world, unit) in the frame apply_shade gives it; false when the
+  // shade's frame is unusable.
+  static bool cycles_mixture(const knit::KnitShade& sh, const knit::KnitMaterial& model, Vec3 wo,
+                             knit::k::KYarnCycles& out);
   static knit::KnitShade shell_shade(const SurfaceInteraction& si);
   // Sets si's shading frame and yarn BSDF from a resolved shade.
   void apply_shade(SurfaceInteraction& si, const knit::KnitShade& sh, const knit::KnitMaterial& model) const;
   float min_footprint_ = 0;  // pattern units: smaller footprints count as none
   float footprint_scale_ = 1;  // pixels
   bool centre_at_pixel_ = true;  // KnitDesc::footprint_centre
+  bool cycles_ = false;          // bsdf_model Cycles
 
   std::shared_ptr<const knit::KnitMaterial> model_;
   std::shared_ptr<const knit::KnitMaterial> point_model_;

@@ -32,8 +32,9 @@ TableAt table_at(const YarnShading& y, Vec3 wi) {
 Rgb YarnShadedMaterial::eval(const SurfaceInteraction& si, Vec3 wo, Vec3 wi) const {
   if (!si.yarn.active || !usable(wo) || !usable(wi) || wi.z == 0.0f) return {};
   const knit::k::kvec3 f =
-      si.yarn.table ? si.yarn.table->eval(si.yarn.mix, to_kvec(wi), si.yarn.bsdf.kd_r, si.yarn.bsdf.kd_t)
-                    : knit::k::yarn_bsdf_eval(si.yarn.bsdf, to_kvec(wo), to_kvec(wi));
+      si.yarn.table    ? si.yarn.table->eval(si.yarn.mix, to_kvec(wi), si.yarn.bsdf.kd_r, si.yarn.bsdf.kd_t)
+      : si.yarn.cycles ? knit::k::yarn_cycles_eval(si.yarn.cyc, to_kvec(wo), to_kvec(wi))
+                       : knit::k::yarn_bsdf_eval(si.yarn.bsdf, to_kvec(wo), to_kvec(wi));
   const float inv = 1.0f / std::fabs(wi.z);
   return {f.x * inv, f.y * inv, f.z * inv};
 }
@@ -41,6 +42,7 @@ Rgb YarnShadedMaterial::eval(const SurfaceInteraction& si, Vec3 wo, Vec3 wi) con
 float YarnShadedMaterial::pdf(const SurfaceInteraction& si, Vec3 wo, Vec3 wi) const {
   if (!si.yarn.active || !usable(wo) || !usable(wi)) return 0;
   if (si.yarn.table) return table_at(si.yarn, wi).leaving_pdf();
+  if (si.yarn.cycles) return knit::k::yarn_cycles_pdf_smooth(si.yarn.cyc, to_kvec(wo), to_kvec(wi));
   return knit::k::yarn_bsdf_pdf(si.yarn.bsdf, to_kvec(wo), to_kvec(wi));
 }
 
@@ -76,7 +78,11 @@ bool YarnShadedMaterial::sample(const SurfaceInteraction& si, Vec3 wo, float uc,
     s.eta = 1;
     return s.pdf > 0 && s.weight.is_finite();
   }
-  const knit::k::KBsdfSample k = knit::k::yarn_bsdf_sample(si.yarn.bsdf, to_kvec(wo), u.x, u.y);
+  // (Cycles' closures: the smooth ones, the transparent one having been the
+  // resolve's pass-through)
+  const knit::k::KBsdfSample k = si.yarn.cycles
+                                     ? knit::k::yarn_cycles_sample_smooth(si.yarn.cyc, to_kvec(wo), u.x, u.y)
+                                     : knit::k::yarn_bsdf_sample(si.yarn.bsdf, to_kvec(wo), u.x, u.y);
   if (!(k.pdf > 0) || k.flags == 0) return false;
   s.wi = from_kvec(k.wi);
   s.weight = {k.weight.x, k.weight.y, k.weight.z};

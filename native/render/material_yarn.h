@@ -3,7 +3,9 @@
 // (material_explicit_yarn.h). Both resolve every hit first (Material::resolve)
 // and leave the kernel BSDF of the hit point in si.yarn; eval, pdf and sample
 // below read it, in the yarn's local frame (si.shading: z the yarn surface
-// normal, x the yarn tangent).
+// normal, x the yarn tangent). The knit model with bsdf_model Cycles leaves
+// the smooth lobes of Cycles' closures instead (si.yarn.cycles,
+// bsdf_cycles.h).
 #pragma once
 
 #include "render/material.h"

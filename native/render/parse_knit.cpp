@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <utility>
 
 #include "knit/pattern.h"
 #include "render/scene_parse_internal.h"
@@ -204,6 +205,22 @@ KnitDesc parse_knit_material(JsonObject& o, const std::string& dir, bool class_t
   }
   mp.ply.yarn_radius = mp.stitch.r;
 
+  // "cycles": as the OSL shader renders it in Cycles (docs/cycles.md). What
+  // Cycles cannot do is left out, so asking for it is an error naming the key.
+  const bool cycles = o.choice("bsdf_model", {"exact", "cycles"}, "exact") == "cycles";
+  mp.bsdf_model = cycles ? knit::KnitBsdfModel::Cycles : knit::KnitBsdfModel::Exact;
+  if (cycles) {
+    const std::pair<const char*, const char*> not_in_cycles[] = {
+        {"footprint_table", "the shader has no class table"},
+        {"table_bsdf", "the shader has no class table"},
+        {"near_field_below_cell", "the shader aggregates every multi-scale footprint"},
+        {"self_shadowing", "Cycles shades the yarn at the base hit, where light and bounces leave"}};
+    for (const auto& [key, why] : not_in_cycles)
+      if (auto n = o.get(key))
+        if (n->boolean())
+          n->fail(std::string("true is not what bsdf_model \"cycles\" renders (") + why +
+                  "): leave it out or set it false");
+  }
   const std::string mode = o.choice("mode", {"near_field", "multi_scale"}, "near_field");
   mp.mode = mode == "near_field" ? knit::KnitMode::NearField : knit::KnitMode::MultiScale;
   mp.capm = o.boolean("capm", mp.capm);
@@ -224,6 +241,8 @@ KnitDesc parse_knit_material(JsonObject& o, const std::string& dir, bool class_t
     mp.capm_options.max_bend = co.number("max_bend", Range::left_open(0, 3.14159265f), mp.capm_options.max_bend);
     co.finish();
   }
+  // (the shader's frames: the hit's, turned with the mesh's curvature)
+  if (cycles) k.frames = KnitFrames::Curvature;
   if (auto f = o.get("frames")) {
     const std::string v = f->string();
     if (v == "exact") {
@@ -238,8 +257,10 @@ KnitDesc parse_knit_material(JsonObject& o, const std::string& dir, bool class_t
   k.explicit_samples =
       static_cast<int>(o.integer("explicit_samples", 4, KnitDesc::kMaxExplicitSamples, k.explicit_samples));
   k.footprint_scale = o.number("footprint_scale", Range::left_open(0, 16), k.footprint_scale);
-  k.footprint_centre = o.choice("footprint_centre", {"pixel", "sample"}, "pixel") == "pixel" ? FootprintCentre::Pixel
-                                                                                      : FootprintCentre::Sample;
+  // (a shader does not know where its sample lies in the pixel)
+  k.footprint_centre = o.choice("footprint_centre", {"pixel", "sample"}, cycles ? "sample" : "pixel") == "pixel"
+                           ? FootprintCentre::Pixel
+                           : FootprintCentre::Sample;
 
   try {
     k.model = std::make_shared<const knit::KnitMaterial>(std::move(pattern), mp);

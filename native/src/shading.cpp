@@ -75,10 +75,26 @@ void KnitMaterialParams::validate() const {
         ("must be > 0 and at most " + num(kMaxCapmSegment)).c_str());
   if (!(capm_options.max_bend > 0) || !std::isfinite(capm_options.max_bend))
     bad("capm_options.max_bend", num(capm_options.max_bend), "must be finite and > 0");
+  if (bsdf_model != KnitBsdfModel::Exact && bsdf_model != KnitBsdfModel::Cycles)
+    bad("bsdf_model", std::to_string(int(bsdf_model)), "must be Exact (0) or Cycles (1)");
+}
+
+KnitMaterialParams KnitMaterialParams::effective() const {
+  KnitMaterialParams p = *this;
+  if (p.bsdf_model == KnitBsdfModel::Cycles) {
+    // What Cycles can do: the shader has no class table (nor the tabulated
+    // BSDF built with it) and aggregates whatever the footprint's size, and
+    // Cycles shades at the base hit, where light and bounces leave.
+    p.footprint_table = false;
+    p.table_bsdf = false;
+    p.near_field_below_cell = false;
+    p.self_shadowing = false;
+  }
+  return p;
 }
 
 KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
-    : params_((params.validate(), std::move(params))),
+    : params_((params.validate(), params.effective())),
       surface_(std::move(pattern), params_.stitch),
       bsdf_(params_.bsdf),
       ply_(ply_profile_for(params_)) {
@@ -279,6 +295,8 @@ int KnitMaterial::footprint_points_for(Vec3 fx, Vec3 fy) const {
   // area covers, at least one point: the points of a tiny footprint would
   // all march the same ray (the near-field limit). A cell or more: all of
   // them (the kernel adds more for many cells).
+  // (The OSL shader passes footprint_points whatever the footprint's size.)
+  if (params_.bsdf_model == KnitBsdfModel::Cycles) return params_.footprint_points;
   const float cell = K_2PI * surface_.geom().row_spacing;
   const float area = std::abs(fx.x * fy.y - fx.y * fy.x) / cell;
   if (!(area < 1)) return params_.footprint_points;  // also NaN

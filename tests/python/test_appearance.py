@@ -1015,6 +1015,14 @@ class KnitMaterialInterface(unittest.TestCase):
         self.assertFalse(knitshade.KnitMaterial(knitshade.Pattern(), near_field_below_cell=False).near_field_below_cell)
         self.assertFalse(knitshade.KnitMaterial(knitshade.Pattern(), self_shadowing=False).self_shadowing)
         self.assertAlmostEqual(d.uv_scale, 40.0)
+        # bsdf_model 'cycles' (docs/cycles.md): what Cycles cannot do is off
+        self.assertEqual(d.bsdf_model, "exact")
+        c = knitshade.KnitMaterial(knitshade.Pattern(), mode="multi_scale", bsdf_model="cycles")
+        self.assertEqual(c.bsdf_model, "cycles")
+        self.assertEqual((c.footprint_table, c.table_bsdf, c.near_field_below_cell, c.self_shadowing),
+                         (False, False, False, False))
+        with self.assertRaisesRegex(ValueError, "bsdf_model = 'osl': must be 'exact' or 'cycles'"):
+            knitshade.KnitMaterial(knitshade.Pattern(), bsdf_model="osl")
         # bsdf and ply as dicts of keyword arguments
         m2 = knitshade.KnitMaterial(knitshade.Pattern(), bsdf=dict(eta=1.2), ply=dict(ply_count=2))
         self.assertAlmostEqual(m2.bsdf.eta, 1.2, places=6)

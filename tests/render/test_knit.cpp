@@ -302,7 +302,7 @@ TEST(CurveShape, HitsFromInsideAndOutsideAreToldApart) {
 // ---------------------------------------------------------------------------
 // Energy and sampling
 
-std::string furnace_scene(const std::string& mode, bool explicit_yarns) {
+std::string furnace_scene(const std::string& mode, bool explicit_yarns, const std::string& bsdf_model = "exact") {
   return R"({
     "film": {"width": 24, "height": 24, "spp": 48, "seed": 5},
     "camera": {"position": [0, 0.3, 1.25], "look_at": [0, 0, 0.3], "fov": 30},
@@ -311,7 +311,7 @@ std::string furnace_scene(const std::string& mode, bool explicit_yarns) {
     "lights": [{"type": "environment", "color": [1, 1, 1]}],
     "materials": {"wool": {"type": "knit", "pattern": ["KKPP", "PPKK"], "uv_scale": 40, "yarn_colors": [[1, 1, 1]],
                            "bsdf": {"eta": 1, "body_energy": 1, "body_reflect": 0, "optical_depth": 0},
-                           "ply": {"enabled": false}, "mode": ")" + mode + R"("}},
+                           "ply": {"enabled": false}, "mode": ")" + mode + R"(", "bsdf_model": ")" + bsdf_model + R"("}},
     "objects": [{"mesh": ")" + mesh("half_cylinder.obj") + R"(", "material": "wool", "transform": {"scale": 0.5}}]
   })";
 }
@@ -459,6 +459,47 @@ TEST(KnitModelHits, FootprintIsCentredAtThePixelsCentre) {
   }
 }
 
+// bsdf_model "cycles" builds a multi-scale footprint as the OSL shader does
+// from Cycles' ray cone (knit_footprint_isotropic): the pixel's width across
+// the view, stretched by 1 / cos along it. On a flat quad that is the same
+// area as the exact ray differentials' parallelogram, which
+// "exact" uses, to the perspective's second order, and it is stretched
+// along the view's projection.
+TEST(KnitModelHits, CyclesFootprintHasThePixelsArea) {
+  for (const float tilt : {0.0f, 40.0f, 70.0f}) {
+    const std::string text = R"({
+      "film": {"width": 64, "height": 64, "spp": 1},
+      "camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "fov": 20},
+      "materials": {"wool": {"type": "knit", "pattern": [[0]], "uv_scale": 400, "yarn_colors": [[0.5, 0.4, 0.3]],
+                             "mode": "multi_scale", "bsdf_model": "cycles"}},
+      "objects": [{"mesh": ")" + mesh("quad.obj") + R"(", "material": "wool",
+                   "transform": {"rotate": [)" + std::to_string(tilt) + R"(, 0, 0]}}]
+    })";
+    Warnings w;
+    const Scene scene(parse_scene(text, "scene.json", test::test_dir()), BuildOptions{}, w);
+    for (const Vec2 pixel : {Vec2(20, 24), Vec2(33, 31), Vec2(45, 40)}) {
+      const RayDifferential ray = scene.camera().generate(pixel.x, pixel.y, 1.0f);
+      SurfaceInteraction si;
+      ASSERT_TRUE(scene.accel().intersect(ray, si));
+      si.cone_width = si.t * ray.cone_spread;
+      const auto* m = dynamic_cast<const KnitModelMaterial*>(&scene.material(si.material));
+      ASSERT_NE(m, nullptr);
+      const knit::BaseHit exact = m->base_hit(si, 1.0f);
+      knit::BaseHit h = exact;
+      ASSERT_TRUE(m->cycles_footprint(si, ray.d, h));
+      const double a_exact = std::fabs(double(exact.dudx) * exact.dvdy - double(exact.dvdx) * exact.dudy);
+      const double a = std::fabs(double(h.dudx) * h.dvdy - double(h.dvdx) * h.dudy);
+      std::printf("[cycles footprint] tilt %2.0f: area %.4g (exact differentials %.4g)\n", tilt, a, a_exact);
+      EXPECT_NEAR(a / a_exact, 1.0, 0.03) << "tilt " << tilt;
+      // The long side along the view's projection on the surface, 1 / cos longer.
+      const Vec3 v = si.shading.to_local(ray.d);
+      const double cosv = std::fabs(v.z);
+      EXPECT_NEAR(std::hypot(h.dudx, h.dvdx) / std::hypot(h.dudy, h.dvdy), 1.0 / std::max(cosv, 0.1), 1e-4);
+      EXPECT_NEAR(std::fabs(h.dudx * v.y - h.dvdx * v.x), 0.0, 1e-4 * std::hypot(h.dudx, h.dvdx));
+    }
+  }
+}
+
 // Explicit yarns do not depend on the scene's absolute scale: a black
 // swatch seen straight down under a white sky lets through the same light
 // whether its tubes have radius 0.02 or 2e-4 world units (Embree 3 alone
@@ -511,6 +552,26 @@ TEST(KnitFurnace, MultiScale) {
   expect_white_furnace(r.image, "multi-scale");
 }
 
+// As Cycles renders it (bsdf_model "cycles", docs/cycles.md): the same
+// lossless yarn is a translucent() closure of weight 1 (the body
+// transmission's albedo; no GGX, no transparent() weight), shaded at the
+// base hit without self-shadowing; multi-scale footprints are all marched.
+TEST(KnitFurnace, CyclesNearField) {
+  const auto r = test::render_text(test::test_dir(), furnace_scene("near_field", false, "cycles"));
+  EXPECT_EQ(r.result.stats.invalid_samples, 0u);
+  EXPECT_GT(r.result.stats.resolve_passes, 0u);
+  EXPECT_EQ(r.result.stats.shell_bounces, 0u);  // (no bounces inside the shell)
+  expect_white_furnace(r.image, "cycles, near field");
+}
+
+TEST(KnitFurnace, CyclesMultiScale) {
+  const auto r = test::render_text(test::test_dir(), furnace_scene("multi_scale", false, "cycles"));
+  EXPECT_EQ(r.result.stats.invalid_samples, 0u);
+  EXPECT_EQ(r.result.stats.table_resolves, 0u);
+  EXPECT_GT(r.result.stats.aggregate_resolves, r.result.stats.camera_resolves / 2);
+  expect_white_furnace(r.image, "cycles, multi-scale");
+}
+
 TEST(KnitFurnace, ExplicitYarns) {
   const auto r = test::render_text(test::test_dir(), furnace_scene("near_field", true));
   EXPECT_EQ(r.result.stats.invalid_samples, 0u);
@@ -524,7 +585,8 @@ TEST(KnitFurnace, ExplicitYarns) {
 // BSDF sampling only and MIS must agree. (1024 samples: BSDF sampling alone
 // finds the small light rarely, and at 256 the image mean of one seed
 // still moves by 1-2% between seeds.)
-std::string strategies_scene(const std::string& strategy, const std::string& mode, bool occluder = false) {
+std::string strategies_scene(const std::string& strategy, const std::string& mode, bool occluder = false,
+                             const std::string& bsdf_model = "exact") {
   // occluder: an opaque board between the fabric and part of the light, so
   // that light samples from inside the yarn shell meet it (PathStats::
   // marches_spared) and NEE must still agree with BSDF sampling.
@@ -540,19 +602,20 @@ std::string strategies_scene(const std::string& strategy, const std::string& mod
                 "two_sided": true}],
     "materials": {"floor": {"type": "diffuse", "albedo": [0.7, 0.7, 0.7]},
                   "wool": {"type": "knit", "pattern": ["KKPP", "PPKK"], "uv_scale": 30, "r": 0.5,
-                           "yarn_colors": [[0.8, 0.5, 0.3]], "mode": ")" + mode + R"(", "footprint_points": 4}},
+                           "yarn_colors": [[0.8, 0.5, 0.3]], "mode": ")" + mode + R"(", "footprint_points": 4,
+                           "bsdf_model": ")" + bsdf_model + R"("}},
     "objects": [{"mesh": ")" + mesh("quad.obj") + R"(", "material": "floor", "transform": {"rotate": [-90, 0, 0], "scale": 3}},
                 {"mesh": ")" + mesh("quad.obj") + R"(", "material": "wool",
                  "transform": {"translate": [0, 0.5, 0], "rotate": [-90, 0, 0], "scale": 1.2}})" + board + R"(]
   })";
 }
 
-void expect_strategies_agree(const std::string& mode, bool occluder = false) {
+void expect_strategies_agree(const std::string& mode, bool occluder = false, const std::string& bsdf_model = "exact") {
   const std::string dir = test::test_dir();
   double mean[3], err[3];
   const char* names[3] = {"mis", "nee", "bsdf"};
   for (int s = 0; s < 3; ++s) {
-    const auto r = test::render_text(dir, strategies_scene(names[s], mode, occluder));
+    const auto r = test::render_text(dir, strategies_scene(names[s], mode, occluder, bsdf_model));
     EXPECT_EQ(r.result.stats.invalid_samples, 0u);
     // Standard error of the image mean from the spread of 4x4-pixel block means.
     const RgbImage b = block_average(r.image, 4);
@@ -571,8 +634,9 @@ void expect_strategies_agree(const std::string& mode, bool occluder = false) {
   }
   for (int s = 1; s < 3; ++s) {
     const double z = (mean[s] - mean[0]) / std::sqrt(err[0] * err[0] + err[s] * err[s]);
-    std::printf("[strategies] %s%s: mis %.5f, %s %.5f (z = %.2f)\n", mode.c_str(), occluder ? " under a board" : "",
-                mean[0], names[s], mean[s], z);
+    std::printf("[strategies] %s%s%s: mis %.5f, %s %.5f (z = %.2f)\n", mode.c_str(),
+                bsdf_model == "exact" ? "" : (", " + bsdf_model).c_str(), occluder ? " under a board" : "", mean[0],
+                names[s], mean[s], z);
     EXPECT_LT(std::fabs(z), 4.0) << names[s];
     EXPECT_NEAR(mean[s] / mean[0], 1.0, 0.03) << names[s];
   }
@@ -580,6 +644,10 @@ void expect_strategies_agree(const std::string& mode, bool occluder = false) {
 
 TEST(KnitStrategies, NearFieldAgree) { expect_strategies_agree("near_field"); }
 TEST(KnitStrategies, MultiScaleAgree) { expect_strategies_agree("multi_scale"); }
+// Cycles' closures: the transparent() weight passes camera and bounce rays
+// (resolve) and attenuates shadow rays (transmittance) alike.
+TEST(KnitStrategies, CyclesNearFieldAgree) { expect_strategies_agree("near_field", false, "cycles"); }
+TEST(KnitStrategies, CyclesMultiScaleAgree) { expect_strategies_agree("multi_scale", false, "cycles"); }
 // Light samples from inside the shell first ask whether an opaque object
 // blocks the light (Accel::occluded_by_blockers) and skip the march if so: a
 // wrong answer there would make NEE darker than BSDF sampling.

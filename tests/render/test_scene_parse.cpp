@@ -399,6 +399,49 @@ TEST(SceneParse, KnitMaterialMapsOntoTheModel) {
   EXPECT_EQ(k.model->surface().pattern().cols(), 2);
 }
 
+// "bsdf_model": "cycles" renders as the OSL shader does in Cycles
+// (docs/cycles.md): the model's Cycles option, the shader's frames and
+// footprints by default, and an error for what Cycles cannot do.
+TEST(SceneParse, KnitBsdfModel) {
+  json j = base_scene();
+  const SceneDesc exact = parse(j);
+  EXPECT_EQ(exact.materials[1].knit.model->params().bsdf_model, knit::KnitBsdfModel::Exact);
+  EXPECT_EQ(exact.materials[1].knit.frames, KnitFrames::Exact);
+  EXPECT_EQ(exact.materials[1].knit.footprint_centre, FootprintCentre::Pixel);
+  j["materials"]["wool"]["bsdf_model"] = "cycles";
+  j["materials"]["wool"]["mode"] = "multi_scale";
+  const SceneDesc d = parse(j);
+  const KnitDesc& k = d.materials[1].knit;
+  const knit::KnitMaterialParams& p = k.model->params();
+  EXPECT_EQ(p.bsdf_model, knit::KnitBsdfModel::Cycles);
+  EXPECT_FALSE(p.self_shadowing);
+  EXPECT_FALSE(p.footprint_table);
+  EXPECT_FALSE(p.table_bsdf);
+  EXPECT_FALSE(p.near_field_below_cell);
+  EXPECT_EQ(k.model->footprint_table(), nullptr);
+  EXPECT_EQ(k.frames, KnitFrames::Curvature);
+  EXPECT_EQ(k.footprint_centre, FootprintCentre::Sample);
+  // Still overridable, and false is what cycles renders anyway.
+  j["materials"]["wool"]["frames"] = "exact";
+  j["materials"]["wool"]["footprint_centre"] = "pixel";
+  j["materials"]["wool"]["self_shadowing"] = false;
+  const SceneDesc o = parse(j);
+  EXPECT_EQ(o.materials[1].knit.frames, KnitFrames::Exact);
+  EXPECT_EQ(o.materials[1].knit.footprint_centre, FootprintCentre::Pixel);
+  for (const char* key : {"self_shadowing", "footprint_table", "table_bsdf", "near_field_below_cell"}) {
+    json b = j;
+    b["materials"]["wool"][key] = true;
+    const std::string e = error_of(b);
+    EXPECT_NE(e.find(std::string("scene.json: materials.wool.") + key +
+                     ": true is not what bsdf_model \"cycles\" renders ("),
+              std::string::npos)
+        << e;
+  }
+  j["materials"]["wool"]["bsdf_model"] = "osl";
+  EXPECT_NE(error_of(j).find("materials.wool.bsdf_model: must be one of \"exact\", \"cycles\""), std::string::npos)
+      << error_of(j);
+}
+
 TEST(SceneParse, KnitPatternFileErrorsNameTheFileLineAndColumn) {
   const std::string dir = test::test_dir();
   test::write_file(dir, "bad.knit", "KKPP\nKPXP\n");

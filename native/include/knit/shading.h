@@ -29,6 +29,14 @@ namespace knit {
 
 enum class KnitMode { NearField = 0, MultiScale = 1 };
 
+// How a host shades the yarn: the near-field yarn BSDF (yarn_bsdf.h) with
+// everything the native renderer does, or as the OSL shader renders it in
+// Cycles (bsdf_cycles.h; docs/cycles.md): the BSDF as Cycles' four closures,
+// light and bounces leaving from the base hit (no self-shadowing), and in
+// multi-scale mode every footprint aggregated by marches with LEAN-widened
+// lobes (no class table, no tabulated BSDF, also below a cell).
+enum class KnitBsdfModel { Exact = 0, Cycles = 1 };
+
 // (A field added here must also go into the class-table cache's key,
 // put_key in src/table_cache.cpp, if the class table may depend on it.)
 struct KnitMaterialParams {
@@ -66,9 +74,17 @@ struct KnitMaterialParams {
   bool near_field_below_cell = true;
   float uv_scale = 40.0f;       // pattern units per UV unit (x = uv_scale u, y = uv_scale v)
   CapmOptions capm_options;
+  // Cycles: KnitMaterial takes footprint_table, table_bsdf,
+  // near_field_below_cell and self_shadowing as false, whatever they are
+  // here (params() shows what it uses), and marches every multi-scale
+  // footprint with footprint_points points, as the shader does.
+  KnitBsdfModel bsdf_model = KnitBsdfModel::Exact;
 
   // Throws std::invalid_argument naming the field and value.
   void validate() const;
+  // These parameters as a KnitMaterial uses them (the implications of
+  // bsdf_model Cycles above).
+  KnitMaterialParams effective() const;
 };
 
 // What the host knows at a hit of the base mesh.
