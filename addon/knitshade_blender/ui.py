@@ -113,7 +113,7 @@ def overview_icon(tree, pat, node, page):
     r0, c0, r1, c1 = page
     if (r1 - r0, c1 - c0) != (rows, cols):
         y0, y1, x0, x1 = r0 * scale, max(r0 * scale, r1 * scale - 1), c0 * scale, max(c0 * scale, c1 * scale - 1)
-        line = max(1, (side * scale) // 128)
+        line = max(1, (side * scale) // 64)
         for sl in (np.s_[y0:y0 + line, x0:x1 + 1], np.s_[max(y1 - line + 1, 0):y1 + 1, x0:x1 + 1],
                    np.s_[y0:y1 + 1, x0:x0 + line], np.s_[y0:y1 + 1, max(x1 - line + 1, 0):x1 + 1]):
             img[sl + (slice(0, 3),)] = (1.0, 0.85, 0.1)
@@ -168,23 +168,22 @@ def draw_status(layout, context, mat, node):
         _wrapped(box, "Knit Fabric is not installed completely: " + props.LOAD_ERROR, icon="ERROR")
     if not compat.with_osl():
         box = layout.box()
-        _wrapped(box, "This Blender's Cycles has no OSL: the knit shader cannot render here.", icon="ERROR")
-        _wrapped(box, "Open the file once in a Blender with OSL (official 4.2 or later) with this add-on: "
-                      "it compiles the shader, and the file then renders anywhere with OSL.")
-        _wrapped(box, "Or render explicit yarn geometry (needs the native module; docs/blender.md).")
+        _wrapped(box, "No OSL in this Blender: the knit shader does not render here.", icon="ERROR")
+        _wrapped(box, "Open the file once in Blender 4.2+ with this add-on to compile it, or use yarn "
+                      "geometry (docs/blender.md).", icon="BLANK1")
     else:
         scene = context.scene
         cs = getattr(scene, "cycles", None)
         if scene.render.engine != "CYCLES" or cs is None or not cs.shading_system:
-            row = layout.row()
-            row.label(text="Renders only in Cycles with Open Shading Language", icon="INFO")
-            row.operator("knitshade.setup_scene", text="Set Up")
+            box = layout.box()
+            _wrapped(box, "Renders only in Cycles with Open Shading Language on", icon="INFO")
+            box.operator("knitshade.setup_scene", text="Use Cycles OSL")
         else:
             ok, why = compat.cycles_device_runs_osl(scene)
             if not ok:
-                row = layout.row()
-                row.label(text=why, icon="ERROR")
-                row.operator("knitshade.setup_scene", text="Use CPU")
+                box = layout.box()
+                _wrapped(box, why, icon="ERROR")
+                box.operator("knitshade.setup_scene", text="Use CPU")
         if node is not None and nodes.needs_compile(node.node_tree):
             row = layout.row()
             row.label(text="Shader not compiled yet", icon="TIME")
@@ -193,21 +192,27 @@ def draw_status(layout, context, mat, node):
         users = nodes.materials_using(node.node_tree)
         if len(users) > 1:
             row = layout.row()
-            row.label(text="Pattern shared by %d materials" % len(users), icon="LINKED")
-            _op(row, "knitshade.make_single_user", mat, node, text="Make Single User")
+            row.label(text="Shared by %d materials" % len(users), icon="LINKED")
+            _op(row, "knitshade.make_single_user", mat, node, text="Single User")
 
 
-def _wrapped(layout, text, icon="NONE", width=60):
+def _wrapped(layout, text, icon="NONE"):
+    """`text` as labels that fit the region's width (Blender cuts a long
+    label in the middle)."""
+    region = getattr(bpy.context, "region", None)
+    scale = bpy.context.preferences.system.ui_scale or 1.0
+    width = max(16, int(((region.width if region else 400) - 70) / (7.0 * scale)))
     col = layout.column(align=True)
     words, line, first = text.split(), "", True
+    indent = "BLANK1" if icon != "NONE" else "NONE"
     for w in words:
         if line and len(line) + 1 + len(w) > width:
-            col.label(text=line, icon=icon if first else "BLANK1")
+            col.label(text=line, icon=icon if first else indent)
             first, line = False, w
         else:
             line = (line + " " + w) if line else w
     if line:
-        col.label(text=line, icon=icon if first else ("BLANK1" if icon != "NONE" else "NONE"))
+        col.label(text=line, icon=icon if first else indent)
 
 
 def draw_settings(layout, mat, names):
@@ -223,7 +228,7 @@ def draw_settings(layout, mat, names):
 
 def draw_stitch(layout, context, mat, node):
     row = layout.row(align=True)
-    row.menu("KNITSHADE_MT_yarn_weights", text="Yarn Weight", icon="PRESET")
+    row.menu("KNITSHADE_MT_yarn_weights", text="Weight", icon="PRESET")
     _op(row, "knitshade.gauge", mat, node, text="Gauge", icon="DRIVER_DISTANCE")
     draw_settings(layout, mat, GROUPS[0][1])
     per_uv = nodes.get_value(node, "UVScale") / (2.0 * math.pi)  # a stitch is 2 pi pattern units wide
@@ -287,17 +292,19 @@ def draw_editor(layout, context, mat, node):
     r1, c1 = min(rows, r0 + size), min(cols, c0 + size)
 
     info = layout.row()
-    info.label(text="%d x %d stitches (rows x columns)" % (rows, cols))
+    info.label(text="%d x %d" % (rows, cols), icon="MESH_GRID")
     info.prop(ed, "page_size", text="Page")
     if paged:
         box = layout.box()
         split = box.split(factor=0.5)
-        split.template_icon(icon_value=overview_icon(tree, pat, node, (r0, c0, r1, c1)), scale=6.0)
+        split.template_icon(icon_value=overview_icon(tree, pat, node, (r0, c0, r1, c1)), scale=8.0)
         nav = split.column(align=True)
-        nav.label(text="Rows %d-%d, columns %d-%d" % (r0 + 1, r1, c0 + 1, c1))
-        for text, icon, dr, dc in (("Up", "TRIA_UP", -size, 0), ("Down", "TRIA_DOWN", size, 0),
-                                   ("Left", "TRIA_LEFT", 0, -size), ("Right", "TRIA_RIGHT", 0, size)):
-            op = nav.operator("knitshade.page", text=text, icon=icon)
+        nav.label(text="Rows %d-%d" % (r0 + 1, r1))
+        nav.label(text="Columns %d-%d" % (c0 + 1, c1))
+        arrows = nav.row(align=True)
+        for icon, dr, dc in (("TRIA_LEFT", 0, -size), ("TRIA_UP", -size, 0),
+                             ("TRIA_DOWN", size, 0), ("TRIA_RIGHT", 0, size)):
+            op = arrows.operator("knitshade.page", text="", icon=icon)
             op.rows, op.cols = dr, dc
             op.max_row, op.max_col = max(0, rows - size), max(0, cols - size)
         nav.prop(ed, "page_row", text="Row")
@@ -306,42 +313,55 @@ def draw_editor(layout, context, mat, node):
     grid = layout.column(align=True)
     codes, colours = pat.codes, pat.colors_or_zero()
     colour_mode = ed.tool == "COLOUR"
-    swatches = [swatch_icon(c) for c in palette] if colour_mode else None
+    # cells show their yarn colour (a swatch) where the pattern has colours,
+    # and only the swatch when painting colours
+    region = getattr(context, "region", None)
+    scale = context.preferences.system.ui_scale or 1.0
+    room = ((region.width if region else 400) - 40) / max(1, c1 - c0) / scale  # pixels a cell
+    tinted = colour_mode or (ed.show_colours and pat.has_colors and room >= 34)
+    swatches = [swatch_icon(c) for c in palette] if tinted else None
+    letters = kpattern.LETTERS
     tool, stitch, brush = ed.tool, ed.stitch, ed.colour
+    last = kshader.PALETTE_SIZE - 1
     for r in range(r0, r1):
         line = grid.row(align=True)
         base = r * cols
         for c in range(c0, c1):
             code = codes[base + c]
-            if colour_mode:
-                idx = min(colours[base + c], kshader.PALETTE_SIZE - 1)
-                op = line.operator("knitshade.paint_cell", text="", icon_value=swatches[idx])
+            if tinted:
+                icon = swatches[min(colours[base + c], last)]
+                op = line.operator("knitshade.paint_cell", text="" if colour_mode else letters[code],
+                                   icon_value=icon, depress=code == 1 and not colour_mode)
             else:
-                op = line.operator("knitshade.paint_cell", text=kpattern.LETTERS[code], depress=code == 1)
+                op = line.operator("knitshade.paint_cell", text=letters[code], depress=code == 1)
             op.row = r
             op.col = c
             op.tool = tool
             op.stitch = stitch
             op.colour = brush
+    opts = layout.row()
+    opts.prop(ed, "show_colours")
 
     col = layout.column(align=True)
     row = col.row(align=True)
-    row.label(text="Cursor: row %d, column %d" % (ed.cursor_row + 1, ed.cursor_col + 1))
-    row = col.row(align=True)
-    row.operator("knitshade.insert_row", text="Row", icon="ADD")
-    row.operator("knitshade.remove_row", text="Row", icon="REMOVE")
-    row.operator("knitshade.insert_column", text="Column", icon="ADD")
-    row.operator("knitshade.remove_column", text="Column", icon="REMOVE")
-    row = col.row(align=True)
-    row.operator("knitshade.resize", text="Resize", icon="FULLSCREEN_ENTER")
-    row.operator("knitshade.fill", text="Fill", icon="SNAP_FACE")
-    row.operator("knitshade.clear_colours", text="Clear Colours", icon="X")
+    row.label(text="Row %d" % (ed.cursor_row + 1))
+    row.operator("knitshade.insert_row", text="", icon="ADD")
+    row.operator("knitshade.remove_row", text="", icon="REMOVE")
+    row.separator()
+    row.label(text="Col %d" % (ed.cursor_col + 1))
+    row.operator("knitshade.insert_column", text="", icon="ADD")
+    row.operator("knitshade.remove_column", text="", icon="REMOVE")
     row = col.row(align=True)
     for icon, dx, dy in (("TRIA_LEFT", -1, 0), ("TRIA_RIGHT", 1, 0), ("TRIA_UP", 0, -1), ("TRIA_DOWN", 0, 1)):
         op = row.operator("knitshade.shift", text="", icon=icon)
         op.dx, op.dy = dx, dy
-    row.operator("knitshade.mirror", text="Mirror", icon="MOD_MIRROR")
-    row.operator("knitshade.flip", text="Flip", icon="UV_SYNC_SELECT")
+    row.separator()
+    row.operator("knitshade.mirror", text="", icon="MOD_MIRROR")
+    row.operator("knitshade.flip", text="", icon="UV_SYNC_SELECT")
+    row.separator()
+    row.operator("knitshade.fill", text="", icon="SNAP_FACE")
+    row.operator("knitshade.clear_colours", text="", icon="X")
+    row.operator("knitshade.resize", text="", icon="FULLSCREEN_ENTER")
 
 
 def draw_native(layout):
@@ -372,7 +392,8 @@ def _panel_classes(space):
         where = dict(bl_space_type="PROPERTIES", bl_region_type="WINDOW", bl_context="material")
         prefix = "KNITSHADE_PT_material"
     else:
-        where = dict(bl_space_type="NODE_EDITOR", bl_region_type="UI", bl_category="Knit Fabric")
+        # in the sidebar's Node tab, under the active node's own panels
+        where = dict(bl_space_type="NODE_EDITOR", bl_region_type="UI", bl_category="Node")
         prefix = "KNITSHADE_PT_node"
 
     def main_poll(cls, context):
@@ -395,7 +416,7 @@ def _panel_classes(space):
             return
         draw_status(layout, context, mat, node)
         row = layout.row(align=True)
-        row.operator("knitshade.refresh_curvature", icon="MOD_SMOOTH")
+        row.operator("knitshade.refresh_curvature", text="Curvature", icon="MOD_SMOOTH")
         _op(row, "knitshade.compile", mat, node, text="Recompile", icon="FILE_REFRESH")
 
     main = type(prefix, (bpy.types.Panel,), dict(

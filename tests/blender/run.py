@@ -23,6 +23,7 @@ The whole log is kept in OUT/blender.log.
 import argparse
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -54,6 +55,7 @@ def find_host(args):
         if not xvfb:
             return None, "xvfb-run not found (Debian: apt-get install xvfb xauth)"
         return [xvfb, "-a", "-s", "-screen 0 1600x1000x24", blender, "--factory-startup",
+                "--window-geometry", "0", "0", "1600", "1000", "--no-window-focus",
                 "--python-exit-code", "1", "--python"], "Blender with a window under xvfb-run"
     # --python-exit-code must come before --python: a failing script then
     # ends Blender with status 1 instead of 0.
@@ -97,12 +99,15 @@ def main():
     cmd = prefix + [script]
     print("%s: %s" % (what, " ".join(cmd)), flush=True)
     t0 = time.time()
+    # its own process group, so a timeout ends Blender and Xvfb with it
+    proc = subprocess.Popen(cmd, env=env, cwd=out, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            text=True, errors="replace", start_new_session=True)
     try:
-        r = subprocess.run(cmd, env=env, cwd=out, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                           text=True, errors="replace", timeout=args.timeout)
-        log, code = r.stdout, r.returncode
-    except subprocess.TimeoutExpired as e:
-        log = (e.stdout or b"").decode("utf-8", "replace") if isinstance(e.stdout, bytes) else (e.stdout or "")
+        log, _ = proc.communicate(timeout=args.timeout)
+        code = proc.returncode
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        log, _ = proc.communicate()
         code = "timeout after %.0f s" % args.timeout
     with open(os.path.join(out, "blender.log"), "w", encoding="utf-8") as f:
         f.write(log)
