@@ -119,6 +119,7 @@ class _PatternEdit(_Target):
 
     bl_options = {"REGISTER", "UNDO"}
     what = "edit"
+    say_unchanged = False
 
     def edit(self, pat, context):
         raise NotImplementedError
@@ -142,6 +143,8 @@ class _PatternEdit(_Target):
             return self.fail("%s: %s refused: %s" % (mat.name, self.what, e), mat)
         if new is None or new == old:  # nothing to change (and no undo step)
             _clear_message(mat)
+            if self.say_unchanged:
+                self.report({"INFO"}, "%s: %s: the pattern is the same" % (mat.name, self.what))
             return {"CANCELLED"}
         try:
             nodes.set_pattern(tree, new, compile="later", report=self.report)
@@ -386,6 +389,7 @@ class KNITSHADE_OT_import_pattern(_PatternEdit, bpy.types.Operator, ImportHelper
     bl_idname = "knitshade.import_pattern"
     bl_label = "Import Pattern"
     what = "import"
+    say_unchanged = True
 
     filename_ext = ".knit"
     filter_glob: StringProperty(default="*.knit;*.txt", options={"HIDDEN"})

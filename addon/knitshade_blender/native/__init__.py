@@ -54,14 +54,28 @@ HOW_TO_GET = ("install the knitshade_blender zip built on this platform (cmake -
               "--target addon_zip) in a Blender whose Python is 3.11 (3.4 to 5.0)")
 
 
+def _shipped():
+    """The compiled module files in this folder."""
+    import os
+    here = os.path.dirname(os.path.abspath(__file__))
+    try:
+        return sorted(n for n in os.listdir(here) if n.startswith("knitshade.") and n.endswith((".so", ".pyd")))
+    except OSError:
+        return []
+
+
 def status():
     """One line for the panel: the module's version, or why it is missing."""
     if AVAILABLE:
         where = " (the copy %s loaded first)" % shared_from if shared_from else ""
         return "Native module %s loaded%s" % (getattr(module, "__version__", "?"), where)
-    py = "%d.%d" % sys.version_info[:2]
-    if py != "3.11":
-        return "Native module not loaded: it is built for Python 3.11, this Blender runs %s" % py
+    import importlib.machinery
+    files = _shipped()
+    if not files:
+        return "Native module not loaded: this add-on was packed without it"
+    if not any(f.endswith(tuple(importlib.machinery.EXTENSION_SUFFIXES)) for f in files):
+        return ("Native module not loaded: %s is not for this Blender's Python %d.%d on this platform"
+                % (files[0], sys.version_info[0], sys.version_info[1]))
     return "Native module not loaded: %s" % error
 
 
