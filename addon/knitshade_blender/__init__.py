@@ -27,7 +27,7 @@ bl_info = {
 if "bpy" in locals():  # F8 / script reload: reload the modules in dependency order
     import importlib
 
-    for _name in ("compat", "native", "settings", "geometry", "nodes", "props", "ops", "ui", "api"):
+    for _name in ("compat", "native", "settings", "geometry", "nodes", "props", "ops", "ui", "api", "yarns"):
         if _name in locals():
             locals()[_name] = importlib.reload(locals()[_name])
 
@@ -35,8 +35,9 @@ import bpy  # noqa: E402,F401
 
 from . import compat, geometry, native, nodes, ops, props, settings, ui  # noqa: E402,F401
 from . import api  # noqa: E402,F401
+from . import yarns  # noqa: E402  (issue 54: yarn geometry)
 
-_MODULES = (props, ops, nodes, ui)
+_MODULES = (props, ops, nodes, ui, yarns)
 
 
 def register():
