@@ -15,9 +15,9 @@ What it makes, for a mesh object and one of its Knit Fabric materials:
   space, so it follows the object's transform; per point the builtin
   `radius` (r / S) and a colour attribute `knit_yarn_colour` (the palette
   colour of the point's colour index);
-- a material "<material> Yarn" reading that attribute (diffuse, translucent
-  and straight-through parts weighted by the Knit Fabric's body scattering
-  settings under a Fresnel-weighted glossy coat);
+- a material "<material> Yarn" reading that attribute: Diffuse, Translucent,
+  Glossy and Transparent closures weighted by the albedos of the yarn BSDF's
+  four lobes (yarn_material());
 - Cycles' curve shape set to 3D curves (round tubes; ribbons would look
   flat) and EEVEE's hair shape to cylinders (strips before 4.2).
 
@@ -101,8 +101,11 @@ def material_settings(mat):
     get = lambda n: nodes.get_value(node, n)  # noqa: E731
     out = {"pattern": nodes.get_pattern(node.node_tree)}
     for key, name in (("a", "A"), ("h", "H"), ("d", "D"), ("r", "R"), ("uv_scale", "UVScale"),
-                      ("roughness", "Roughness"), ("ior", "IOR"), ("body_energy", "BodyEnergy"),
-                      ("body_reflect", "BodyReflect"), ("transmit_tint", "TransmitTint")):
+                      ("roughness", "Roughness"), ("roughness_across", "RoughnessAcross"), ("ior", "IOR"),
+                      ("body_energy", "BodyEnergy"), ("body_reflect", "BodyReflect"),
+                      ("optical_depth", "OpticalDepth"), ("transmit_tint", "TransmitTint"),
+                      ("ply_detail", "PlyDetail"), ("ply_count", "PlyCount"), ("ply_twist", "PlyTwist"),
+                      ("fiber_count", "FiberCount"), ("fiber_twist", "FiberTwist")):
         try:
             out[key] = get(name)
         except KeyError:
@@ -322,18 +325,45 @@ def make_curves(name, sizes, pos, radius, colour, scene):
 
 # ---- the yarn material ---------------------------------------------------
 
-def _mix_factor(node):
-    return node.inputs[0]
+def _multiply(nt, colour_socket, factor_rgb, location):
+    """A Mix (multiply) node: colour_socket x factor_rgb; returns its output."""
+    mix = nt.nodes.new("ShaderNodeMix")
+    mix.data_type = "RGBA"
+    mix.blend_type = "MULTIPLY"
+    mix.location = location
+    mix.inputs[0].default_value = 1.0
+    a_in = [s for s in mix.inputs if s.name == "A" and s.type == "RGBA"][0]
+    b_in = [s for s in mix.inputs if s.name == "B" and s.type == "RGBA"][0]
+    nt.links.new(colour_socket, a_in)
+    b_in.default_value = tuple(factor_rgb)[:3] + (1.0,)
+    return [s for s in mix.outputs if s.name == "Result" and s.type == "RGBA"][0]
 
 
-def yarn_material(knit_mat, settings):
+def yarn_weights(settings):
+    """The yarn material's closure weights for a Knit Fabric's settings
+    (native.yarns.yarn_weights: the exact lobes' albedos)."""
+    g = settings.get
+    return nyarns.yarn_weights(
+        roughness=g("roughness", 0.15), roughness_across=g("roughness_across", 0.45), ior=g("ior", 1.55),
+        body_energy=g("body_energy", 0.7), body_reflect=g("body_reflect", 0.6),
+        optical_depth=g("optical_depth", 1.0), ply_detail=bool(g("ply_detail", True)),
+        ply_count=g("ply_count", 3), ply_twist=g("ply_twist", 28.65), fiber_count=g("fiber_count", 40),
+        fiber_twist=g("fiber_twist", -20.05), r=g("r", 0.65))
+
+
+def yarn_material(knit_mat, settings, weights=None):
     """The curves' material for a Knit Fabric material: made once, its
-    values set again at every generation. The yarn colour comes from the
-    curves' colour attribute; the knit material's body scattering splits
-    the light into diffuse (reflected), translucent (through the yarn,
-    tinted) and transparent (straight through) parts under a glossy coat
-    weighted by Fresnel at its IOR. An approximation of the yarn BSDF
-    with Blender's own nodes, so it renders in Cycles and EEVEE alike."""
+    nodes made again at every generation. The yarn colour comes from the
+    curves' colour attribute. Each lobe of the yarn BSDF becomes the Blender
+    closure that stands for it, weighted by the lobe's albedo for a white
+    yarn (averaged over view directions, with the ply detail's mean
+    shadowing): Diffuse (body reflection, x colour), Translucent (body
+    transmission, x colour x transmission tint), Glossy GGX (specular
+    reflection) and Transparent (light straight through the yarn), added.
+    The same split the OSL shader makes per view direction
+    (native/kernel/bsdf_cycles.h), fixed per material, with Blender's own
+    nodes, so it renders in Cycles and EEVEE alike."""
+    weights = weights or yarn_weights(settings)
     mat = None
     for m in bpy.data.materials:
         if m.get(MATERIAL_KEY) == knit_mat.name:
@@ -342,9 +372,7 @@ def yarn_material(knit_mat, settings):
     if mat is None:
         mat = bpy.data.materials.new(knit_mat.name + " Yarn")
         mat[MATERIAL_KEY] = knit_mat.name
-    if not getattr(mat, "use_nodes", True):
-        mat.use_nodes = True
-    if mat.node_tree is None:
+    if mat.node_tree is None or not getattr(mat, "use_nodes", True):
         mat.use_nodes = True
     nt = mat.node_tree
     nt.nodes.clear()
@@ -352,57 +380,47 @@ def yarn_material(knit_mat, settings):
     attr = N("ShaderNodeAttribute")
     attr.attribute_type = "GEOMETRY"
     attr.attribute_name = COLOUR_ATTR
-    attr.location = (-800, 0)
-    tint = N("ShaderNodeMix")
-    tint.data_type = "RGBA"
-    tint.blend_type = "MULTIPLY"
-    tint.location = (-550, -200)
-    tint.inputs[0].default_value = 1.0
+    attr.location = (-900, 0)
+    col = attr.outputs["Color"]
+    wr, wt = weights["body_r"], weights["body_t"]
+    tint = tuple(settings.get("transmit_tint", (1.0, 1.0, 1.0)))[:3]
     diffuse = N("ShaderNodeBsdfDiffuse")
-    diffuse.location = (-300, 200)
+    diffuse.location = (-300, 300)
+    nt.links.new(_multiply(nt, col, (wr, wr, wr), (-600, 300)), diffuse.inputs["Color"])
     translucent = N("ShaderNodeBsdfTranslucent")
-    translucent.location = (-300, 0)
-    transparent = N("ShaderNodeBsdfTransparent")
-    transparent.location = (-300, -200)
+    translucent.location = (-300, 100)
+    nt.links.new(_multiply(nt, col, tuple(wt * c for c in tint), (-600, 100)), translucent.inputs["Color"])
     glossy = N("ShaderNodeBsdfGlossy")
-    glossy.location = (-300, -350)
-    fresnel = N("ShaderNodeFresnel")
-    fresnel.location = (-50, 300)
-    body = N("ShaderNodeMixShader")
-    body.name = body.label = "Body: reflected / transmitted"
-    body.location = (-50, 100)
-    through = N("ShaderNodeMixShader")
-    through.name = through.label = "Straight through / scattered"
-    through.location = (150, 0)
-    coat = N("ShaderNodeMixShader")
-    coat.name = coat.label = "Glossy coat"
-    coat.location = (350, 0)
-    out = N("ShaderNodeOutputMaterial")
-    out.location = (550, 0)
-    links = nt.links
-    links.new(attr.outputs["Color"], diffuse.inputs["Color"])
-    # (the Mix node's colour sockets are its 7th and 8th inputs: A, B of RGBA)
-    a_in = [s for s in tint.inputs if s.name == "A" and s.type == "RGBA"][0]
-    b_in = [s for s in tint.inputs if s.name == "B" and s.type == "RGBA"][0]
-    res = [s for s in tint.outputs if s.name == "Result" and s.type == "RGBA"][0]
-    links.new(attr.outputs["Color"], a_in)
-    b_in.default_value = tuple(settings.get("transmit_tint", (1.0, 1.0, 1.0)))[:3] + (1.0,)
-    links.new(res, translucent.inputs["Color"])
-    links.new(diffuse.outputs[0], body.inputs[1])
-    links.new(translucent.outputs[0], body.inputs[2])
-    links.new(transparent.outputs[0], through.inputs[1])
-    links.new(body.outputs[0], through.inputs[2])
-    links.new(through.outputs[0], coat.inputs[1])
-    links.new(glossy.outputs[0], coat.inputs[2])
-    links.new(fresnel.outputs[0], _mix_factor(coat))
-    links.new(coat.outputs[0], out.inputs["Surface"])
-    _mix_factor(body).default_value = 1.0 - float(settings.get("body_reflect", 0.6))
-    _mix_factor(through).default_value = float(settings.get("body_energy", 0.7))
-    fresnel.inputs["IOR"].default_value = float(settings.get("ior", 1.55))
-    glossy.inputs["Roughness"].default_value = math.sqrt(max(0.0, float(settings.get("roughness", 0.15))))
-    glossy.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    glossy.location = (-300, -100)
     if hasattr(glossy, "distribution"):
         glossy.distribution = "GGX"
+    ws = weights["spec"]
+    glossy.inputs["Color"].default_value = (ws, ws, ws, 1.0)
+    # isotropic, at the lobe's geometric-mean alpha (Blender's roughness is sqrt(alpha))
+    alpha = math.sqrt(max(1e-6, float(settings.get("roughness", 0.15))
+                          * float(settings.get("roughness_across", 0.45))))
+    glossy.inputs["Roughness"].default_value = math.sqrt(alpha)
+    transparent = N("ShaderNodeBsdfTransparent")
+    transparent.location = (-300, -300)
+    wd = weights["through"]
+    transparent.inputs["Color"].default_value = (wd, wd, wd, 1.0)
+    add1 = N("ShaderNodeAddShader")
+    add1.location = (-50, 200)
+    add2 = N("ShaderNodeAddShader")
+    add2.location = (-50, -200)
+    add3 = N("ShaderNodeAddShader")
+    add3.location = (150, 0)
+    out = N("ShaderNodeOutputMaterial")
+    out.location = (350, 0)
+    L_ = nt.links
+    L_.new(diffuse.outputs[0], add1.inputs[0])
+    L_.new(translucent.outputs[0], add1.inputs[1])
+    L_.new(glossy.outputs[0], add2.inputs[0])
+    L_.new(transparent.outputs[0], add2.inputs[1])
+    L_.new(add1.outputs[0], add3.inputs[0])
+    L_.new(add2.outputs[0], add3.inputs[1])
+    L_.new(add3.outputs[0], out.inputs["Surface"])
+    mat["knitshade_yarn_weights"] = {k: float(v) for k, v in weights.items()}
     pal = settings.get("palette") or [(0.5, 0.36, 0.25)]
     mat.diffuse_color = tuple(pal[0])[:3] + (1.0,)
     if hasattr(mat, "surface_render_method"):  # EEVEE 4.2 and later
