@@ -65,6 +65,10 @@ DEFAULT_YARN_WEIGHT = "worsted"  # the library's a, h, d, r
 DEFAULT_METRES_PER_UV = 2.0
 
 COMPILE_DELAY = 0.4  # seconds of quiet after an edit from the editor before compiling
+# Background Blender runs no timers, so an operator's edit compiles at once
+# there. A script making many edits may turn this off and compile once at
+# the end (api.compile_shader; a save compiles what waits).
+compile_edits_in_background = True
 
 
 class KnitError(ValueError):
@@ -197,8 +201,12 @@ def set_pattern(tree, pat, compile="now", report=None):
     if compile == "now":
         return ensure_compiled(tree, report)
     if compile == "later":
-        if bpy.app.background:  # no timers: now, or never before a render
+        if bpy.app.background and compile_edits_in_background:  # no timers: now, or not before a render
             return ensure_compiled(tree, report)
+        if bpy.app.background:
+            if compat.with_osl():
+                _pending.add(tree.name)
+            return None
         schedule_compile(tree)
     return None
 

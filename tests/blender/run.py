@@ -95,6 +95,14 @@ def main():
     env["KNIT_TEST_HOST"] = args.host
     env.pop("PYTHONPATH", None)  # nothing of the build tree: the zip is what is tested
     env.pop("PYTHONHOME", None)
+    if args.host != "bpy":
+        # Debian's Blender embeds the system's Python, which finds its prefix
+        # from the first python3 on PATH: a pyenv or venv python there (pyenv
+        # puts its own first for a pip-installed ctest) hides the system's
+        # site-packages, numpy with them.
+        keep = [p for p in env.get("PATH", "").split(os.pathsep)
+                if p and not os.path.exists(os.path.join(p, "python3")) or p in ("/usr/bin", "/bin")]
+        env["PATH"] = os.pathsep.join(["/usr/bin"] + [p for p in keep if p != "/usr/bin"])
     script = os.path.join(HERE, args.script)
     cmd = prefix + [script]
     print("%s: %s" % (what, " ".join(cmd)), flush=True)

@@ -5,6 +5,7 @@ parser's or the library's message) and leaves the data as it was."""
 import math
 import os
 import sys
+import time
 
 import bpy
 
@@ -117,6 +118,9 @@ def test_add_node(addon):
 
 
 def test_pattern_edits(addon):
+    # (compiling each edit is tested by test_material and test_render; here
+    # the edits wait for one compile at the end, as a script may choose)
+    addon.nodes.compile_edits_in_background = False
     fresh(preset="stockinette")
     base = stored(addon)
     T.equal(ops.paint_cell(material=MAT, row=0, col=1), {"FINISHED"}, "paint_cell cycle")
@@ -219,6 +223,12 @@ def test_pattern_edits(addon):
     ops.set_pattern(material="Knit Copy", text="P")
     T.equal(stored(addon), before, "the original's pattern after editing the copy")
     T.op_fails(ops.make_single_user, material="Nope", contains="no material 'Nope'")
+    if addon.compat.with_osl():
+        T.check(addon.nodes.pending(), "no edit waits to be compiled")
+    addon.nodes.flush_pending()
+    T.equal(addon.nodes.pending(), [], "edits still waiting after flush_pending")
+    T.check(not addon.nodes.needs_compile(addon.nodes.knit_node(mat()).node_tree), "the edits were not compiled")
+    addon.nodes.compile_edits_in_background = True
 
 
 def test_import_export(addon):
@@ -339,8 +349,9 @@ def main():
     T.fresh_scene()
     for fn in (test_add_material, test_add_node, test_pattern_edits, test_import_export, test_settings,
                test_curvature, test_editor_state):
+        t0 = time.time()
         fn(addon)
-        T.say("%s passed" % fn.__name__)
+        T.say("%s passed (%.1f s)" % (fn.__name__, time.time() - t0))
 
 
 T.run(main)
