@@ -227,7 +227,8 @@ def test_pattern_edits(addon):
         T.check(addon.nodes.pending(), "no edit waits to be compiled")
     addon.nodes.flush_pending()
     T.equal(addon.nodes.pending(), [], "edits still waiting after flush_pending")
-    T.check(not addon.nodes.needs_compile(addon.nodes.knit_node(mat()).node_tree), "the edits were not compiled")
+    if addon.compat.with_osl():
+        T.check(not addon.nodes.needs_compile(addon.nodes.knit_node(mat()).node_tree), "the edits were not compiled")
     addon.nodes.compile_edits_in_background = True
 
 

@@ -121,14 +121,23 @@ hidden = []
 def collapse_surface():
     """Cycles' Surface panel lists every input of the group (29 rows) above
     the Knit Fabric panel, and Blender 3.4 has no way to collapse a panel
-    from Python: for the screenshot it is taken out (as an artist would
-    collapse it), and put back after."""
+    from Python: for the screenshot its poll says no (as if an artist had
+    collapsed it), and is given back after."""
     surf = getattr(bpy.types, "CYCLES_MATERIAL_PT_surface", None)
     if surf is not None:
-        bpy.utils.unregister_class(surf)
-        hidden.append(surf)
+        hidden.append((surf, surf.__dict__.get("poll")))
+        surf.poll = classmethod(lambda cls, context: False)
     area_of("PROPERTIES").tag_redraw()
     return 0.5
+
+
+def restore_surface():
+    for cls, poll in hidden:
+        if poll is None:
+            del cls.poll
+        else:
+            cls.poll = poll
+    del hidden[:]
 
 
 def shot_material_tab():
@@ -136,9 +145,7 @@ def shot_material_tab():
     screenshot("material_tab.png")
     with override(area_of("PROPERTIES")):
         bpy.ops.screen.back_to_previous()
-    for cls in hidden:
-        bpy.utils.register_class(cls)
-    del hidden[:]
+    restore_surface()
     return 0.5
 
 
@@ -231,9 +238,7 @@ def shots_big():
     screenshot("material_tab_256.png")
     with override(area_of("PROPERTIES")):
         bpy.ops.screen.back_to_previous()
-    for cls in hidden:
-        bpy.utils.register_class(cls)
-    del hidden[:]
+    restore_surface()
     return 0.2
 
 
