@@ -27,7 +27,8 @@ bl_info = {
 if "bpy" in locals():  # F8 / script reload: reload the modules in dependency order
     import importlib
 
-    for _name in ("compat", "native", "settings", "geometry", "nodes", "props", "ops", "ui", "api", "yarns"):
+    for _name in ("compat", "native", "settings", "geometry", "nodes", "props", "ops", "ui", "api", "yarns",
+                  "preview"):
         if _name in locals():
             locals()[_name] = importlib.reload(locals()[_name])
 
@@ -35,9 +36,9 @@ import bpy  # noqa: E402,F401
 
 from . import compat, geometry, native, nodes, ops, props, settings, ui  # noqa: E402,F401
 from . import api  # noqa: E402,F401
-from . import yarns  # noqa: E402  (issue 54: yarn geometry)
+from . import preview, yarns  # noqa: E402  (issue 54: yarn geometry, swatch preview)
 
-_MODULES = (props, ops, nodes, ui, yarns)
+_MODULES = (props, ops, nodes, ui, yarns, preview)
 
 
 def register():
