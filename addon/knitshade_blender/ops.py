@@ -745,8 +745,6 @@ class KNITSHADE_OT_add_node(bpy.types.Operator):
         self.report({"INFO"}, "Knit Fabric node added" + ("; " + ", ".join(changed) if changed else ""))
         for wtext in warnings:
             self.report({"WARNING"}, wtext)
-        if compat.with_osl() is False:
-            pass
 
 
 class KNITSHADE_OT_refresh_curvature(bpy.types.Operator):

@@ -10,7 +10,6 @@ from 3.4 on loads a libtbb.so.12 of its own that the module then shares.
 
 Lists the module's NEEDED entries (readelf -d) and what ldd resolves them to.
 """
-import os
 import re
 import shutil
 import subprocess

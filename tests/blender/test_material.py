@@ -245,6 +245,12 @@ def main():
         T.equal(bpy.ops.ed.redo(), {"FINISHED"}, "redo")
         T.equal(bpy.ops.ed.redo(), {"FINISHED"}, "redo")
         T.equal(api.get_pattern(bpy.data.materials["Knit"]), edited, "pattern after two redos")
+        r0 = api.get_parameters(bpy.data.materials["Knit"])["r"]
+        T.equal(bpy.ops.knitshade.set_stitch("EXEC_DEFAULT", True, material="Knit", r=0.45), {"FINISHED"},
+                "set_stitch with an undo step")
+        T.close(api.get_parameters(bpy.data.materials["Knit"])["r"], 0.45, "r")
+        T.equal(bpy.ops.ed.undo(), {"FINISHED"}, "undo of a setting")
+        T.close(api.get_parameters(bpy.data.materials["Knit"])["r"], r0, "r after undo")
         nodes.flush_pending()
         check_structure(addon, bpy.data.materials["Knit"])
     T.say("undo and redo of pattern edits")

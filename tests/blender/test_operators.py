@@ -305,7 +305,15 @@ def test_settings(addon):
     cube.data.uv_layers.remove(cube.data.uv_layers[0])
     T.op_fails(ops.gauge, material=MAT, object="NoUV", contains="NoUV has no UV map")
 
+    scene = bpy.context.scene
+    scene.render.engine = "BLENDER_EEVEE" if "BLENDER_EEVEE" in {i.identifier for i in
+                                                                scene.render.bl_rna.properties["engine"].enum_items} \
+        else scene.render.engine
+    scene.cycles.shading_system = False
+    scene.cycles.device = "GPU"  # (no OptiX here: a GPU device that cannot run OSL)
     T.equal(ops.setup_scene(), {"FINISHED"}, "setup_scene")
+    T.equal((scene.render.engine, scene.cycles.shading_system, scene.cycles.device), ("CYCLES", True, "CPU"),
+            "engine, OSL, device after setup_scene")
 
     T.equal(ops.compile(material=MAT), {"FINISHED"}, "compile")
     T.op_fails(ops.compile, material="Nope", contains="no material 'Nope'")
