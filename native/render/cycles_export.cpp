@@ -256,7 +256,7 @@ Attrs knit_parameters(const MaterialDesc& md, const std::string& file, Warnings&
       if (rc[ch] == 0) {
         if (tc[ch] == 0) continue;
         throw SceneError(file, md.path + ".transmit_colors[" + std::to_string(i) + "]",
-                         "transmission colour (" + fmt_num(tc[0]) + ", " + fmt_num(tc[1]) + ", " + fmt_num(tc[2]) +
+                         "transmission colour (" + num(tc[0]) + ", " + num(tc[1]) + ", " + num(tc[2]) +
                              ") over a yarn colour with a zero channel: the Cycles shader takes the yarn colours "
                              "times one tint");
       }
@@ -265,10 +265,10 @@ Attrs knit_parameters(const MaterialDesc& md, const std::string& file, Warnings&
         tint[ch] = t;
       } else if (std::fabs(t - tint[ch]) > 1e-5f * std::max(1.0f, tint[ch])) {
         throw SceneError(file, md.path + ".transmit_colors[" + std::to_string(i) + "]",
-                         "transmission colour (" + fmt_num(tc[0]) + ", " + fmt_num(tc[1]) + ", " + fmt_num(tc[2]) +
+                         "transmission colour (" + num(tc[0]) + ", " + num(tc[1]) + ", " + num(tc[2]) +
                              ") is not the yarn colour times the tint the colours before it give (" +
-                             fmt_num(tint[0] < 0 ? 1 : tint[0]) + ", " + fmt_num(tint[1] < 0 ? 1 : tint[1]) +
-                             ", " + fmt_num(tint[2] < 0 ? 1 : tint[2]) +
+                             num(tint[0] < 0 ? 1 : tint[0]) + ", " + num(tint[1] < 0 ? 1 : tint[1]) +
+                             ", " + num(tint[2] < 0 ? 1 : tint[2]) +
                              "): the Cycles shader takes the yarn colours times one tint");
       }
     }
@@ -279,21 +279,25 @@ Attrs knit_parameters(const MaterialDesc& md, const std::string& file, Warnings&
     const float packed = knit::PlyParams::packed_radius(p.ply.ply_count);
     if (std::fabs(p.ply.ply_radius - packed) > 1e-6f * std::max(1.0f, packed))
       throw SceneError(file, md.path + ".ply.ply_radius",
-                       "ply_radius " + fmt_num(p.ply.ply_radius) +
+                       "ply_radius " + num(p.ply.ply_radius) +
                            ": the Cycles shader takes the packed radius of its ply_count (" +
-                           std::to_string(p.ply.ply_count) + " plies: " + fmt_num(packed) + ")");
+                           std::to_string(p.ply.ply_count) + " plies: " + num(packed) + ")");
   }
   const knit::CapmOptions defaults;
   if (p.capm_options.max_segment != defaults.max_segment)
-    warnings.add(file + ": " + md.path + ".capm_options.max_segment = " + fmt_num(p.capm_options.max_segment) +
+    warnings.add(file + ": " + md.path + ".capm_options.max_segment = " + num(p.capm_options.max_segment) +
                  " is not exported: the Cycles shader marches segments of at most " +
-                 fmt_num(defaults.max_segment) + " pattern units");
+                 num(defaults.max_segment) + " pattern units");
   if (p.capm_options.max_bend != defaults.max_bend)
-    warnings.add(file + ": " + md.path + ".capm_options.max_bend = " + fmt_num(p.capm_options.max_bend) +
-                 " is not exported: the Cycles shader bends segments by at most " + fmt_num(defaults.max_bend) +
+    warnings.add(file + ": " + md.path + ".capm_options.max_bend = " + num(p.capm_options.max_bend) +
+                 " is not exported: the Cycles shader bends segments by at most " + num(defaults.max_bend) +
                  " radians");
+  const knit::YarnBsdfParams bsdf_defaults;
+  if (b.trans_roughness_x != bsdf_defaults.trans_roughness_x || b.trans_roughness_y != bsdf_defaults.trans_roughness_y)
+    warnings.add(file + ": " + md.path + ".bsdf.trans_roughness_x/_y = " + num(b.trans_roughness_x) + ", " +
+                 num(b.trans_roughness_y) + " is not exported: the Cycles shader has no input for it");
   if (md.knit.footprint_scale != 1.0f && p.mode == knit::KnitMode::MultiScale)
-    warnings.add(file + ": " + md.path + ".footprint_scale = " + fmt_num(md.knit.footprint_scale) +
+    warnings.add(file + ": " + md.path + ".footprint_scale = " + num(md.knit.footprint_scale) +
                  " is not exported: the Cycles shader's footprint is Cycles' ray cone");
 
   const double deg = 180.0 / kPiD;
@@ -551,7 +555,12 @@ CyclesExport export_cycles(const SceneDesc& desc, const CyclesExportOptions& opt
   for (size_t mi = 0; mi < desc.materials.size(); ++mi) {
     if (!used[mi]) continue;
     const MaterialDesc& md = desc.materials[mi];
-    x.open("shader", {{"name", md.path}});
+    if (md.type == MaterialType::Knit)
+      // The shader's text holds emission() (its error colour), so Cycles
+      // would count every triangle of the fabric as a light to sample.
+      x.open("shader", {{"name", md.path}, {"emission_sampling_method", "none"}});
+    else
+      x.open("shader", {{"name", md.path}});
     switch (md.type) {
       case MaterialType::Diffuse:
         x.empty("diffuse_bsdf", {{"name", "bsdf"}, {"color", rgb(md.diffuse.albedo)}});

@@ -321,7 +321,7 @@ def check_scene(cli, scene_path, out_dir, *extra):
             check(close_list(floats(nodes["through"].get("color")), m["transmittance"]), f"{name}: {mname}: thin")
             check(close_list(floats(nodes["bsdf"].get("color")), m.get("albedo", [0, 0, 0])), f"{name}: {mname}")
         elif t == "knit":
-            check_knit(name, mname, m, nodes, links, scene_dir, out_dir, cli, mname in curved_materials)
+            check_knit(name, mname, m, sh, nodes, links, scene_dir, out_dir, cli, mname in curved_materials)
 
     # Lights.
     check_lights(name, scene, root, shaders, states, scene_dir, out_dir)
@@ -353,8 +353,9 @@ def check_curvature(what, P, N, verts, uv, tangent):
     print(f"{what}: curvature of {ntri} triangles within {err:.1e} of the add-on's (largest {scale:.4g})")
 
 
-def check_knit(name, mname, m, nodes, links, scene_dir, out_dir, cli, curved):
+def check_knit(name, mname, m, sh, nodes, links, scene_dir, out_dir, cli, curved):
     what = f"{name}: {mname}"
+    check(sh.get("emission_sampling_method") == "none", f"{what}: the fabric is sampled as a light")
     knits = [n for n in nodes.values() if n.tag == "osl_shader"]
     if not check(len(knits) == 1, f"{what}: {len(knits)} script nodes"):
         return
