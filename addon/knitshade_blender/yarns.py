@@ -314,12 +314,10 @@ def make_curves(name, sizes, pos, radius, colour, scene):
     # Poly curves: the viewport and EEVEE draw the points as they are (a
     # Catmull-Rom type would be drawn subdivided, 12 times the points);
     # Cycles smooths 3D curves through the points either way.
+    # (Mesh to Curve makes poly curves already; CURVE_TYPE_POLY is 1, and a
+    # 2 there is Bezier without handles, which crashes Blender 3.4 on load.)
     if hasattr(cv, "set_types"):
         cv.set_types(type="POLY")
-    else:
-        ct = cv.attributes.get("curve_type")
-        if ct is not None and len(ct.data):
-            ct.data.foreach_set("value", np.full(len(ct.data), 2, dtype=np.int8))  # CURVE_TYPE_POLY
     return cv
 
 

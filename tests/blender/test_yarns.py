@@ -240,6 +240,14 @@ def check_plane(mod):
     T.equal(len(bpy.data.objects), n_objects, "objects after generating again")
     T.equal(len(bpy.data.hair_curves), 1, "curves datablocks after generating again (%s before)" % data_before)
     compare(mod, obj, mat, "plane, second pattern")
+    # saved and opened again: the same curves (a Curves datablock Blender reads back)
+    path = T.out_path("plane_yarns.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=path)
+    before = generated(yarn_object(obj))[0]
+    bpy.ops.wm.open_mainfile(filepath=path)
+    after = generated(yarn_object(bpy.data.objects["Swatch"]))[0]
+    T.equal(len(after), len(before), "curves after reload")
+    T.check(all(np.array_equal(x, y) for x, y in zip(before, after)), "the curves changed in the saved file")
     return n
 
 
