@@ -611,6 +611,11 @@ def generate(obj, material="", samples=DEFAULT_SAMPLES, hide_source=True, contex
 
 # ---- the operator --------------------------------------------------------
 
+def needs_confirmation(job):
+    """Whether the operator asks before it starts (many curve points)."""
+    return job.estimate["points"] > CONFIRM_POINTS
+
+
 class KNITSHADE_OT_generate_yarns(bpy.types.Operator):
     """Lay the Knit Fabric material's yarns on the mesh as curves (renders in Cycles on every device and in EEVEE; needs the native module)"""
 
@@ -659,7 +664,7 @@ class KNITSHADE_OT_generate_yarns(bpy.types.Operator):
             return {"CANCELLED"}
         self.interactive = True
         self._estimate_text = job.describe_estimate()
-        if job.estimate["points"] > CONFIRM_POINTS:
+        if needs_confirmation(job):
             return context.window_manager.invoke_props_dialog(self, width=460)
         return self.execute(context)
 
@@ -764,7 +769,6 @@ class KNITSHADE_PT_material_yarns(bpy.types.Panel):
     bl_context = "material"
     bl_label = "Yarn Geometry"
     bl_parent_id = PARENT_PANEL
-    bl_options = {"DEFAULT_CLOSED"}
     bl_order = 7
 
     @classmethod

@@ -348,6 +348,51 @@ def check_scarf(mod):
     T.check(dt < 10.0, "the scarf's yarns took %.1f s (at most 10)" % dt)
 
 
+class FakeOperator:
+    """Stands in for the operator's instance to drive its modal() without a
+    window (background Blender has no event loop)."""
+
+    def __init__(self, op_class, job):
+        self._job_, self._timer, self._area, self.reports = job, None, None, []
+        self._end = lambda context: op_class._end(self, context)
+        self._done = lambda job_: op_class._done(self, job_)
+
+    def report(self, kind, text):
+        self.reports.append((set(kind), text))
+
+
+def check_modal(mod):
+    """The modal steps: a timer event lays a part of the yarns, Esc stops
+    with nothing changed; run to the end, the object is made."""
+    T.fresh_scene()
+    obj = T.plane("Big")
+    mod.api.add_knit_material(obj, pattern="K P", uv_scale=900.0, setup_scene=False)
+    Op = mod.yarns.KNITSHADE_OT_generate_yarns
+    ev = lambda kind: type("Event", (), {"type": kind})()  # noqa: E731
+    job = mod.yarns.YarnJob(bpy.context, obj, "", SAMPLES)
+    T.say("estimate: " + job.describe_estimate())
+    T.check(not mod.yarns.needs_confirmation(job), "a small job asks for confirmation")
+    job.estimate = dict(job.estimate, points=mod.yarns.CONFIRM_POINTS + 1)
+    T.check(mod.yarns.needs_confirmation(job), "a big job does not ask for confirmation")
+    fake = FakeOperator(Op, mod.yarns.YarnJob(bpy.context, obj, "", SAMPLES))
+    T.equal(Op.modal(fake, bpy.context, ev("TIMER")), {"RUNNING_MODAL"}, "modal after a timer event")
+    T.check(0 < fake._job_.layout.band < fake._job_.layout.bands, "no progress after a step")
+    T.equal(Op.modal(fake, bpy.context, ev("ESC")), {"CANCELLED"}, "modal after Esc")
+    T.check(any("cancelled" in t for _k, t in fake.reports), "no report of the cancel: %r" % fake.reports)
+    T.equal([o for o in bpy.data.objects if o.type == "CURVES"], [], "curves after a cancel")
+    fake = FakeOperator(Op, mod.yarns.YarnJob(bpy.context, obj, "", SAMPLES))
+    steps = 0
+    while True:
+        r = Op.modal(fake, bpy.context, ev("TIMER"))
+        steps += 1
+        if r != {"RUNNING_MODAL"}:
+            break
+    T.equal(r, {"FINISHED"}, "modal at the end")
+    T.say("modal: %d timer steps; %s" % (steps, fake.reports[-1][1]))
+    T.check(steps >= 2, "the job ran in %d step(s)" % steps)
+    yarn_object(obj)
+
+
 def check_render(mod):
     T.fresh_scene()
     scene = bpy.context.scene
@@ -397,7 +442,7 @@ def main():
     T.say(T.blender())
     mod = T.install()
     T.check(mod.native.AVAILABLE, "the native module did not load: %s" % mod.native.status())
-    for fn in (check_plane, check_half_cylinder, check_seam, check_errors, check_scarf, check_render):
+    for fn in (check_plane, check_half_cylinder, check_seam, check_errors, check_modal, check_scarf, check_render):
         t0 = time.time()
         fn(mod)
         T.say("%s: %.1f s" % (fn.__name__, time.time() - t0))
