@@ -147,6 +147,23 @@ def compile_script_node(node, report):
     return bool(osl.update_script_node(node, report))
 
 
+def knit_cycles_material_settings(material):
+    """What a Knit Fabric material sets in Cycles' material settings, where
+    this Blender has them: no emission sampling (the shader never emits;
+    Cycles cannot tell from an OSL script and would sample the fabric's faces
+    as lights), and no bump map correction (4.2 and later: it bends the
+    microfacet normal and softens diffuse light at the yarn's normals, which
+    the knit model, rendered natively "as Cycles renders it", does not do;
+    docs/shader.md)."""
+    cm = getattr(material, "cycles", None)
+    if cm is None:
+        return
+    if hasattr(cm, "emission_sampling"):
+        cm.emission_sampling = "NONE"
+    if hasattr(cm, "use_bump_map_correction"):
+        cm.use_bump_map_correction = False
+
+
 def cycles_device_runs_osl(scene):
     """(ok, why): whether the scene's Cycles device can run OSL shaders (CPU,
     or OptiX GPUs), and what to say when it cannot."""

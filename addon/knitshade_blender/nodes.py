@@ -545,6 +545,7 @@ def new_material(pat=None, values=None, name=MATERIAL_NAME, report=None):
         if p.name in vals:
             set_value(node, p.name, vals[p.name])
     mat.diffuse_color = tuple(vals.get("Yarn0", (0.5, 0.36, 0.25)))[:3] + (1.0,)
+    compat.knit_cycles_material_settings(mat)
     return mat
 
 

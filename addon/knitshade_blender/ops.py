@@ -742,6 +742,9 @@ class KNITSHADE_OT_add_node(bpy.types.Operator):
             for p in nodes.params():
                 if p.name in vals:
                     nodes.set_value(node, p.name, vals[p.name])
+        material = getattr(context, "material", None) or getattr(context.space_data, "id", None)
+        if isinstance(material, bpy.types.Material):
+            compat.knit_cycles_material_settings(material)
         self.report({"INFO"}, "Knit Fabric node added" + ("; " + ", ".join(changed) if changed else ""))
         for wtext in warnings:
             self.report({"WARNING"}, wtext)
