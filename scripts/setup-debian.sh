@@ -3,7 +3,7 @@
 # missing. Safe to run any number of times; does nothing when all is present.
 #
 #   scripts/setup-debian.sh            build + test dependencies
-#   scripts/setup-debian.sh --minimal  only what the library, CLI and demo need
+#   scripts/setup-debian.sh --minimal  only what the library, CLI, add-on and demo need (Blender too)
 set -euo pipefail
 
 build_pkgs=(
@@ -13,11 +13,12 @@ build_pkgs=(
   libopencolorio-dev
   libassimp-dev nlohmann-json3-dev
   python3 python3-dev python3-numpy pybind11-dev
+  blender
 )
 test_pkgs=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev
-  blender xvfb xauth
+  xvfb xauth
   python3-venv libvulkan1
 )
 
