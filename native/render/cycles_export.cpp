@@ -556,8 +556,9 @@ CyclesExport export_cycles(const SceneDesc& desc, const CyclesExportOptions& opt
     if (!used[mi]) continue;
     const MaterialDesc& md = desc.materials[mi];
     if (md.type == MaterialType::Knit)
-      // The shader's text holds emission() (its error colour), so Cycles
-      // would count every triangle of the fabric as a light to sample.
+      // The fabric emits nothing: never sample its triangles as lights
+      // (Cycles decides from a scan of the shader's bytecode for
+      // "emission" otherwise; an earlier shader's error colour was one).
       x.open("shader", {{"name", md.path}, {"emission_sampling_method", "none"}});
     else
       x.open("shader", {{"name", md.path}});
