@@ -11,7 +11,7 @@ The scarf of examples/scenes/scarf.json built with the add-on's API
 the bytes of the curves' data in Blender (the arrays of its attributes)
 against the Knit Fabric material's (its shader text and, where Blender has
 OSL, the compiled bytecode); and a Cycles CPU render of the scene at its
-400 x 480 pixels with the yarns (16 points per stitch) and, where Blender
+400 x 480 pixels with the yarns (the default points per stitch) and, where Blender
 has OSL, with the knit shader, and without the scarf: time and Cycles'
 peak memory (from the render's status lines).
 """
@@ -117,7 +117,7 @@ def main():
                                  "points": int(info["points"]), "bytes": curves_bytes(yo.data)}
         print("bench: %d points per stitch: %.2f s, %d curves, %d points, %.2f MB"
               % (samples, min(times), info["curves"], info["points"], curves_bytes(yo.data) / 2 ** 20), flush=True)
-    yo = ks.yarns.generate(obj, samples=16)
+    yo = ks.yarns.generate(obj)  # the default points per stitch
     bpy.app.handlers.render_stats.append(_on_stats)
     obj.hide_render, yo.hide_render = True, True
     out["render_without_scarf"] = render(scene, "without")

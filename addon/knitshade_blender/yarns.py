@@ -47,7 +47,7 @@ YARN_KEY = "knitshade_yarns"  # on the yarn object: {"source", "material", "samp
 MATERIAL_KEY = "knitshade_yarn_material"  # on the yarn material: the Knit Fabric material's name
 COLOUR_ATTR = "knit_yarn_colour"
 COLOUR_TYPE = "FLOAT_COLOR"
-DEFAULT_SAMPLES = 16  # points per stitch: Cycles draws the curves as Catmull-Rom splines through them
+DEFAULT_SAMPLES = 32  # points per stitch: Cycles draws Catmull-Rom splines through them, within 1% of r of the curve
 CONFIRM_POINTS = 4_000_000  # above this many curve points the operator asks first
 # Modifiers that move a mesh's vertices over time.
 DEFORMING = {"ARMATURE", "CLOTH", "SOFT_BODY", "MESH_DEFORM", "SURFACE_DEFORM", "LATTICE", "HOOK", "WAVE",

@@ -2,7 +2,8 @@
 xvfb-run, no -b): the material tab's Swatch Preview and Yarn Geometry
 panels drawn; the preview started from its operator renders in the CLI's
 own process while Blender keeps drawing (polled from a timer), and the
-panel then shows it; Generate Yarn Geometry invoked as from its button
+panel then shows it; a colour changed afterwards renders it again by
+itself (debounced); Generate Yarn Geometry invoked as from its button
 runs as a modal operator (a progress bar, the area's header) and leaves
 one undo step; a screenshot of the tab with both. run.py fails the test on
 any Python traceback in Blender's log (panel draws and timers print their
@@ -116,6 +117,33 @@ def wait_preview():
     return 0.5
 
 
+def edit_colour():
+    """A setting changed after a preview: the panel notices it when it
+    redraws and renders again a second after the last change."""
+    mat = bpy.data.objects["Cube"].active_material
+    st = addon.preview.state(mat.name)
+    state["key0"] = st.key
+    addon.api.set_parameters(mat, yarn0=(0.1, 0.3, 0.6))
+    area_of("PROPERTIES").tag_redraw()
+    state["t2"] = time.time()
+    return 0.3
+
+
+def wait_refresh():
+    mat = bpy.data.objects["Cube"].active_material
+    st = addon.preview.state(mat.name)
+    if st.key == state["key0"] or st.status == "running":
+        T.check(time.time() - state["t2"] < 120, "the preview was not refreshed after the edit (status %s)"
+                % st.status)
+        area_of("PROPERTIES").tag_redraw()
+        STEPS.insert(0, wait_refresh)
+        return 0.3
+    T.equal((st.status, st.message), ("done", ""), "the refreshed preview")
+    T.equal(st.key, addon.preview.material_key(mat), "the refreshed preview's settings")
+    T.say("preview refreshed by itself after the edit: %.1f s after it" % (time.time() - state["t2"]))
+    return 0.3
+
+
 def generate():
     cube = bpy.data.objects["Cube"]
     with override(area_of("PROPERTIES")):
@@ -174,7 +202,7 @@ def undo():
     return 0.3
 
 
-STEPS = [setup, make_material, start_preview, wait_preview, generate, wait_yarns, hide_surface, screenshot, undo]
+STEPS = [setup, make_material, start_preview, wait_preview, edit_colour, wait_refresh, generate, wait_yarns, hide_surface, screenshot, undo]
 
 
 def runner():
