@@ -140,13 +140,16 @@ std::vector<Params> param_sets() {
   std::vector<Params> v;
   v.push_back(Params{});
   Params p;
-  p.ax = 0.05f, p.ay = 0.05f, p.tax = 0.1f, p.tay = 0.1f, p.tag = "smooth";
+  p.ax = 0.05f, p.ay = 0.05f, p.tax = 0.1f, p.tay = 0.1f, p.tag = "smooth";  // (transparent() takes 0.37 of f_T)
   v.push_back(p);
   p = Params{};
   p.ax = 0.6f, p.ay = 0.9f, p.tax = 0.8f, p.tay = 1.0f, p.eta = 1.33f, p.D = 2.0f, p.layers = 2, p.tag = "rough_2layers";
   v.push_back(p);
   p = Params{};
   p.eta = 3.0f, p.B = 0.2f, p.r = 0.3f, p.G = 0.6f, p.D = 0.3f, p.tag = "eta3_thin";
+  v.push_back(p);
+  p = Params{};
+  p.tax = 0.03f, p.tay = 0.05f, p.B = 0.4f, p.tag = "clear_slab";  // (0.86 of f_T on transparent())
   v.push_back(p);
   return v;
 }
@@ -167,8 +170,16 @@ TEST(BsdfCycles, WeightsGiveTheExactLobesAlbedos) {
         const Vec3 wo = dir_deg(th, ph);
         const ExactAlbedos e = exact_albedos(p, wo);
         const k::KCyclesLobes w = k::yarn_cycles_lobes(yb, wo);
-        // (per unit colour: the body weights are linear in their colours)
-        const double got[4] = {w.spec * e.e_ggx, w.body_r.x / p.kr.x, w.body_t.x / p.kt.x, w.through};
+        // body_t holds the body transmission (coloured, kt) and the share of
+        // the thin-slab lobe f_T that transparent() does not take (white):
+        // the two apart from the channels' difference. The whole of f_T is
+        // then through plus that share.
+        const double body_t = (double(w.body_t.x) - w.body_t.z) / (double(p.kt.x) - p.kt.z);
+        const double rest = w.body_t.x - p.kt.x * body_t;
+        const double share = std::exp(-double(std::max(p.tax, 1e-3f)) * std::max(p.tay, 1e-3f) / 0.01);
+        EXPECT_NEAR(w.through, share * (w.through + rest), 1e-5 + 1e-4 * w.through) << p.tag << " theta " << th;
+        // (body_r per unit colour: linear in its colour)
+        const double got[4] = {w.spec * e.e_ggx, w.body_r.x / p.kr.x, body_t, w.through + rest};
         const double want[4] = {e.spec, e.body_r, e.body_t, e.thin};
         for (int l = 0; l < 4; ++l) {
           // relative, with a floor of 0.01 of the incident light (lobes that
@@ -183,7 +194,7 @@ TEST(BsdfCycles, WeightsGiveTheExactLobesAlbedos) {
       }
     }
   }
-  const char* names[4] = {"spec", "body_r", "body_t", "through"};
+  const char* names[4] = {"spec", "body_r", "body_t", "f_T"};
   for (int l = 0; l < 4; ++l)
     std::printf("[cycles weights] %-7s worst error %.4f (%s)\n", names[l], worst[l], where[l].c_str());
   EXPECT_LT(worst[0], 0.12) << where[0];
@@ -384,9 +395,11 @@ TEST(BsdfCycles, LobesVanishWhereTheExactOnesDo) {
   EXPECT_EQ(c.w.through, 0.f);
   EXPECT_EQ(c.p0, 0.f);
   EXPECT_EQ(c.p3, 0.f);
-  c = make(1.5f, black, black, 0.5f, 0.5f);  // black body: GGX and delta only
+  c = make(1.5f, black, black, 0.5f, 0.5f);  // black body: no diffuse(); translucent() has f_T's share alone
   EXPECT_EQ(c.p1, 0.f);
-  EXPECT_EQ(c.p2, 0.f);
+  EXPECT_GT(c.p2, 0.f);
+  EXPECT_EQ(c.w.body_t.x, c.w.body_t.z);
+  EXPECT_NEAR(c.w.through / (c.w.through + c.w.body_t.x), std::exp(-0.3 * 0.5 / 0.01), 1e-6);
   c = make(1.f, black, black, 1.f, 0.5f);  // nothing: sampling fails cleanly
   const k::KBsdfSample s = k::yarn_cycles_sample(c, wo, 0.5f, 0.5f);
   EXPECT_EQ(s.pdf, 0.f);

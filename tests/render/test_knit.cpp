@@ -603,7 +603,10 @@ std::string strategies_scene(const std::string& strategy, const std::string& mod
     "materials": {"floor": {"type": "diffuse", "albedo": [0.7, 0.7, 0.7]},
                   "wool": {"type": "knit", "pattern": ["KKPP", "PPKK"], "uv_scale": 30, "r": 0.5,
                            "yarn_colors": [[0.8, 0.5, 0.3]], "mode": ")" + mode + R"(", "footprint_points": 4,
-                           "bsdf_model": ")" + bsdf_model + R"("}},
+                           "bsdf_model": ")" + bsdf_model + R"(")" +
+         // (with Cycles' closures, a smooth thin-slab lobe, most of it on the
+         // transparent() closure, so that its pass-through is tested)
+         (bsdf_model == "cycles" ? R"(, "bsdf": {"trans_roughness_x": 0.04, "trans_roughness_y": 0.06})" : "") + R"(}},
     "objects": [{"mesh": ")" + mesh("quad.obj") + R"(", "material": "floor", "transform": {"rotate": [-90, 0, 0], "scale": 3}},
                 {"mesh": ")" + mesh("quad.obj") + R"(", "material": "wool",
                  "transform": {"translate": [0, 0.5, 0], "rotate": [-90, 0, 0], "scale": 1.2}})" + board + R"(]
