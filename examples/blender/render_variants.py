@@ -11,7 +11,8 @@ bytecode compiled into it where this Blender has OSL, or the yarn curves in
 it where it has not), which renders on a machine without the add-on. One
 progress line per variant, a summary at the end, and DIR/contact_sheet.png
 with every variant, labelled with its name. The exit status is 1 when a
-variant failed (the others are still rendered).
+variant failed (the others are still rendered), 2 when the list is wrong
+(nothing rendered).
 
 --mode: shader renders the knit shader (Cycles with OSL: Blender 4.2 and
 later official builds), yarns lays explicit yarn geometry on the objects
@@ -256,7 +257,7 @@ def apply_variant(ks, mat, v, lst, original, original_pattern):
     """Set the material to the variant: the list's settings over the
     material's own, and its pattern (else the material's own)."""
     pat = resolve_pattern(ks, lst["patterns"][v["pattern"]], lst["base"]) if v["pattern"] else original_pattern
-    changes = dict(original)
+    changes = {}
     if v["palette"]:
         cols = lst["palettes"][v["palette"]]
         if not isinstance(cols, list) or not cols or len(cols) > 8:
@@ -264,6 +265,7 @@ def apply_variant(ks, mat, v, lst, original, original_pattern):
         for i, c in enumerate(cols):
             changes["yarn%d" % i] = tuple(c)
     changes.update(v["settings"])
+    ks.api.set_parameters(mat, **original)  # what the previous variant changed, back
     ks.api.set_parameters(mat, **changes)
     if pat != ks.api.get_pattern(mat):
         ks.api.set_pattern(mat, pat)  # (compiles the shader where Blender has OSL)
@@ -287,6 +289,12 @@ def main(argv=None):
     ks = scene_json.ensure_addon(a.addon_zip)
     lst = load_list(a.variants)
     mat = find_material(ks, lst["material"])
+    for v in lst["variants"]:  # every pattern read before anything renders
+        if v["pattern"]:
+            try:
+                resolve_pattern(ks, lst["patterns"][v["pattern"]], lst["base"])
+            except (ValueError, OSError) as e:
+                raise VariantError("%s: pattern '%s': %s" % (a.variants, v["pattern"], e)) from None
     mode = a.mode if a.mode != "auto" else ("shader" if ks.api.has_osl() else "yarns")
     if mode == "shader" and not ks.api.has_osl():
         raise SystemExit("render_variants: --mode shader needs a Blender whose Cycles has OSL (this one has not)")
@@ -362,6 +370,10 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    status = main()
+    try:
+        status = main()
+    except VariantError as e:
+        print("render_variants: %s" % e, flush=True)
+        status = 2
     if status:
         sys.exit(status)

@@ -40,10 +40,10 @@ ISLAND_SCALE_WARN = 1.5
 # curve (offset 4, type 1): estimate() and the report.
 BLENDER_BYTES_PER_POINT = 32
 BLENDER_BYTES_PER_CURVE = 5
-# Cycles' copy for rendering, per point (measured: docs/blender-yarns.md):
-# key + radius (16), the colour attribute (16), its BVH (about 64 with
-# Embree's curve segments).
-CYCLES_BYTES_PER_POINT = 96
+# Cycles' copy for rendering, per point: key and radius (16), the colour
+# attribute (16), the BVH's curve segments; measured on the scarf (docs/
+# blender-yarns.md): 92 bytes a point in Cycles 5.0.1, 167 in 3.4.1.
+CYCLES_BYTES_PER_POINT = 170
 
 
 class LayoutError(ValueError):
