@@ -25,7 +25,9 @@ over 4x4-pixel blocks) and writes a side-by-side PNG (model | explicit |
                      in the near field (the footprint's shape too in
                      multi-scale mode)
 With the default reference the JSON is as it always was, one entry per case;
-otherwise each case holds {"against": {REF: {pixels, blocks4, noise_rmse}}}.
+otherwise each case holds {"against": {REF: {pixels, blocks4, noise_rmse}}},
+and with explicit among the references, each other one's own comparison with
+explicit yarns in {"reference_vs_explicit": {pixels, blocks4}}.
 --cases: comma-separated names of CASES (default: the first five).
 """
 import argparse
@@ -164,6 +166,16 @@ def main():
                 subprocess.run(["oiiotool", model, img, diff, "--mosaic", "3x1",
                                 "--tocolorspace", "sRGB", "-d", "uint8",
                                 "-o", os.path.join(images, f"compare_{tag}.png")], check=True)
+        if "explicit" in refs:
+            # The other references against the ground truth too: what each departs from it by.
+            for ref in refs:
+                if ref == "explicit":
+                    continue
+                a_img = os.path.join(out, f"{name}_{ref}.exr")
+                e_img = os.path.join(out, f"{name}_explicit.exr")
+                against[ref]["reference_vs_explicit"] = {
+                    "pixels": json.loads(run(["compare", a_img, e_img])),
+                    "blocks4": json.loads(run(["compare", a_img, e_img, "--block", "4"]))}
         if classic:
             r = against["explicit"]
             results[name] = {"size": size, "spp": spp, "pixels": r["pixels"], "blocks4": r["blocks4"],

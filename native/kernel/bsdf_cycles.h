@@ -21,16 +21,16 @@
  *   spec     F(wo.h) D G2 / (4 cos cos) -> the GGX lobe without Fresnel
  *            weighted by the visible normals' mean Fresnel reflectance,
  *            E[F(wo.h) g] / E[g] over h ~ D_wo (g = G2 / G1, the sample
- *            weight of the GGX lobe). F(|wo.z|) at the macro normal was 3 to
- *            6 times the exact albedo at 85 degrees across the yarn.
+ *            weight of the GGX lobe). F(|wo.z|) at the macro normal gives 5
+ *            times the exact albedo at 85 degrees across the yarn.
  *   body_r   r B G (1 - F_o) k_R int LS (1 - F_i) |wi.z| dwi
  *            = r B G (1 - F_o) k_R int_0^1 mu (1 - F(mu)) / (mu + mu_o) dmu.
  *   body_t   (1 - r) B G (1 - F_o) k_T int tau (1 - F_i) |wi.z| / pi dwi.
  *            tau = exp(-k (l(wo) + l(wi))) with k = n D / 2 factorises, so
  *            this is exp(-k l(wo)) C(k, eta), C the cosine-weighted mean of
  *            exp(-k l(w)) (1 - F(|w.z|)) over a hemisphere. The
- *            straight-through tau (exp(-2 k l(wo))) was 40-97% off at 60-85
- *            degrees.
+ *            straight-through tau (exp(-2 k l(wo))) gives 97% too little to
+ *            148% too much at 60-89 degrees.
  *   through  the thin-slab lobe f_T, centred on wi = -wo with roughness
  *            spec_t: its albedo (1 - B) exp(-k l(wo)) E[(1 - F(wo.h))^2 g
  *            exp(-k l(wi))] (h ~ D_wo of spec_t, wi the mirrored
