@@ -617,7 +617,7 @@ def needs_confirmation(job):
 
 
 class KNITSHADE_OT_generate_yarns(bpy.types.Operator):
-    """Lay the Knit Fabric material's yarns on the mesh as curves (renders in Cycles on every device and in EEVEE; needs the native module)"""
+    """Lay the Knit Fabric's yarns on the mesh as curves: they render in Cycles on every device and in EEVEE"""
 
     bl_idname = "knitshade.generate_yarns"
     bl_label = "Generate Yarn Geometry"

@@ -202,7 +202,8 @@ def undo():
     return 0.3
 
 
-STEPS = [setup, make_material, start_preview, wait_preview, edit_colour, wait_refresh, generate, wait_yarns, hide_surface, screenshot, undo]
+STEPS = [setup, make_material, start_preview, wait_preview, edit_colour, wait_refresh, generate, wait_yarns,
+         hide_surface, screenshot, undo]
 
 
 def runner():
