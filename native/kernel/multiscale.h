@@ -177,6 +177,109 @@ KNIT_FN float knit_footprint_p_delta(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes)
   return KFLT(f.n - hits) / KFLT(f.n);
 }
 
+/* The running sums of an aggregate, point by point: knit_agg_begin, then
+ * knit_agg_add for each footprint point in order with its march (and, for a
+ * hit, the layer count under it), then knit_agg_finish. knit_aggregate is
+ * that loop; a host that marches the points itself (the OSL shader, whose
+ * near field is a footprint of one point) calls the three and keeps one
+ * march in its code. */
+KNIT_STRUCT(KAggSum)
+  int n;            /* the footprint's point count */
+  int hits;
+  int pick;         /* the point whose hit gives color_pick (knit_aggregate) */
+  int color_pick;
+  float side;       /* +1 front, -1 behind */
+  float sx, sy, sxx, sxy, syy; /* slope sums */
+  float lsum, ssum; /* layers over hits, steps over points */
+  kvec3 nsum, tsum, psum;
+  float color_w[KNIT_MS_COLORS];
+KNIT_STRUCT_END(KAggSum)
+
+KNIT_FN KAggSum knit_agg_begin(int n, float shift_x, float shift_y, kvec3 wi_local) {
+  KAggSum a;
+  int c;
+  /* which hit gives color_pick: a fraction of the (unknown) hit count */
+  float pf = knit_frac(shift_x * KF(7.0) + shift_y * KF(3.0) + KF(0.5));
+  a.n = n;
+  a.hits = 0;
+  a.pick = KINT(k_floor(pf * KFLT(n)));
+  a.color_pick = -1;
+  a.side = KZ(wi_local) < KF(0.0) ? KF(-1.0) : KF(1.0);
+  a.sx = KF(0.0);
+  a.sy = KF(0.0);
+  a.sxx = KF(0.0);
+  a.sxy = KF(0.0);
+  a.syy = KF(0.0);
+  a.lsum = KF(0.0);
+  a.ssum = KF(0.0);
+  a.nsum = kv3(KF(0.0), KF(0.0), KF(0.0));
+  a.tsum = kv3(KF(0.0), KF(0.0), KF(0.0));
+  a.psum = kv3(KF(0.0), KF(0.0), KF(0.0));
+  for (c = 0; c < KNIT_MS_COLORS; c++) a.color_w[c] = KF(0.0);
+  return a;
+}
+
+/* Point i's march st; layers: the tubes under its hit (unused on a miss). */
+KNIT_FN KAggSum knit_agg_add(KNIT_IN(KAggSum) in, int i, KNIT_IN(KnitCapm) st, int layers) {
+  KAggSum a = in;
+  a.ssum = a.ssum + KFLT(st.steps);
+  if (st.state == KNIT_CAPM_HIT) {
+    kvec3 nn = st.hit.n;
+    kvec3 tt = st.hit.tangent;
+    kvec3 sl = knit_ms_slopes(nn, a.side);
+    float bx = KX(sl), by = KY(sl);
+    int ci = k_mini(k_maxi(st.hit.colour, 0), KNIT_MS_COLORS - 1);
+    a.hits = a.hits + 1;
+    if (a.color_pick < 0 || i <= a.pick) a.color_pick = st.hit.colour;
+    a.nsum = kv3_add(a.nsum, nn);
+    /* Tangents are lines, not arrows: align each with the running sum. */
+    a.tsum = kv3_dot(a.tsum, tt) < KF(0.0) ? kv3_sub(a.tsum, tt) : kv3_add(a.tsum, tt);
+    a.psum = kv3_add(a.psum, st.hit.p);
+    a.sx = a.sx + bx;
+    a.sy = a.sy + by;
+    a.sxx = a.sxx + bx * bx;
+    a.sxy = a.sxy + bx * by;
+    a.syy = a.syy + by * by;
+    a.lsum = a.lsum + KFLT(layers);
+    a.color_w[ci] = a.color_w[ci] + KF(1.0);
+  }
+  return a;
+}
+
+/* The aggregate of the sums; (x, y) is the footprint's centre (the mean hit
+ * position when nothing was hit). */
+KNIT_FN KnitAggregate knit_agg_finish(KNIT_IN(KAggSum) s, float x, float y) {
+  KnitAggregate a;
+  int c;
+  a.points = s.n;
+  a.hits = s.hits;
+  a.color_pick = s.color_pick;
+  a.p_delta = KFLT(s.n - s.hits) / KFLT(s.n);
+  a.steps = s.ssum / KFLT(s.n);
+  if (s.hits > 0) {
+    float inv = KF(1.0) / KFLT(s.hits);
+    float mx = s.sx * inv, my = s.sy * inv;
+    a.n = kv3_normalize(s.nsum);
+    a.tangent = kv3_normalize(s.tsum);
+    a.position = kv3_scale(s.psum, inv);
+    a.sxx = k_fmax(s.sxx * inv - mx * mx, KF(0.0));
+    a.syy = k_fmax(s.syy * inv - my * my, KF(0.0));
+    a.sxy = s.sxy * inv - mx * my;
+    a.layers = s.lsum * inv;
+    for (c = 0; c < KNIT_MS_COLORS; c++) a.color_w[c] = s.color_w[c] * inv;
+  } else {
+    a.n = kv3(KF(0.0), KF(0.0), KF(1.0));
+    a.tangent = kv3(KF(1.0), KF(0.0), KF(0.0));
+    a.position = kv3(x, y, KF(0.0));
+    a.sxx = KF(0.0);
+    a.syy = KF(0.0);
+    a.sxy = KF(0.0);
+    a.layers = KF(0.0);
+    for (c = 0; c < KNIT_MS_COLORS; c++) a.color_w[c] = KF(0.0);
+  }
+  return a;
+}
+
 /* Aggregates n_points CAPM marches over the footprint centred at (x, y).
  * fx = (dx/dpx, dy/dpx), fy = (dx/dpy, dy/dpy) in pattern units (KZ unused);
  * shift_x/y in [0,1): per-shading-point Cranley-Patterson shift. The base is
@@ -188,75 +291,16 @@ KNIT_FN KnitAggregate knit_aggregate(KNIT_IN(KnitGeom) g, KNIT_ARRAY(int, codes)
                                      float x, float y, kvec3 fx, kvec3 fy, kvec3 wi_local,
                                      int n_points, float shift_x, float shift_y, float kx, float ky,
                                      float max_segment, int max_steps) {
-  KnitAggregate a;
   KFootprint f = knit_footprint(g, x, y, fx, fy, n_points, shift_x, shift_y);
-  int n = f.n;
-  int i, c;
-  float sx = KF(0.0), sy = KF(0.0), sxx = KF(0.0), sxy = KF(0.0), syy = KF(0.0);
-  kvec3 nsum = kv3(KF(0.0), KF(0.0), KF(0.0));
-  kvec3 tsum = kv3(KF(0.0), KF(0.0), KF(0.0));
-  kvec3 psum = kv3(KF(0.0), KF(0.0), KF(0.0));
-  float lsum = KF(0.0), ssum = KF(0.0);
-  float side = KZ(wi_local) < KF(0.0) ? KF(-1.0) : KF(1.0);
-  int pick = -1;
-  a.points = n;
-  a.hits = 0;
-  {
-    /* which hit gives color_pick: a fraction of the (unknown) hit count */
-    float pf = knit_frac(shift_x * KF(7.0) + shift_y * KF(3.0) + KF(0.5));
-    pick = KINT(k_floor(pf * KFLT(n)));
-  }
-  a.color_pick = -1;
-  for (c = 0; c < KNIT_MS_COLORS; c++) a.color_w[c] = KF(0.0);
-  for (i = 0; i < n; i++) {
+  KAggSum s = knit_agg_begin(f.n, shift_x, shift_y, wi_local);
+  int i;
+  for (i = 0; i < f.n; i++) {
     kvec3 pt = knit_footprint_point(g, f, i);
-    KnitCapm st;
-    st = knit_capm_curved(g, codes, colors, KX(pt), KY(pt), wi_local, kx, ky, max_segment, max_steps);
-    ssum = ssum + KFLT(st.steps);
-    if (st.state == KNIT_CAPM_HIT) {
-      kvec3 nn = st.hit.n;
-      kvec3 tt = st.hit.tangent;
-      kvec3 sl = knit_ms_slopes(nn, side);
-      float bx = KX(sl), by = KY(sl);
-      int ci = k_mini(k_maxi(st.hit.colour, 0), KNIT_MS_COLORS - 1);
-      a.hits = a.hits + 1;
-      if (a.color_pick < 0 || i <= pick) a.color_pick = st.hit.colour;
-      nsum = kv3_add(nsum, nn);
-      /* Tangents are lines, not arrows: align each with the running sum. */
-      tsum = kv3_dot(tsum, tt) < KF(0.0) ? kv3_sub(tsum, tt) : kv3_add(tsum, tt);
-      psum = kv3_add(psum, st.hit.p);
-      sx = sx + bx;
-      sy = sy + by;
-      sxx = sxx + bx * bx;
-      sxy = sxy + bx * by;
-      syy = syy + by * by;
-      lsum = lsum + KFLT(knit_vertical_layers(g, codes, colors, KX(st.hit.p), KY(st.hit.p)));
-      a.color_w[ci] = a.color_w[ci] + KF(1.0);
-    }
+    KnitCapm st = knit_capm_curved(g, codes, colors, KX(pt), KY(pt), wi_local, kx, ky, max_segment, max_steps);
+    int layers = st.state == KNIT_CAPM_HIT ? knit_vertical_layers(g, codes, colors, KX(st.hit.p), KY(st.hit.p)) : 0;
+    s = knit_agg_add(s, i, st, layers);
   }
-  a.p_delta = KFLT(n - a.hits) / KFLT(n);
-  a.steps = ssum / KFLT(n);
-  if (a.hits > 0) {
-    float inv = KF(1.0) / KFLT(a.hits);
-    float mx = sx * inv, my = sy * inv;
-    a.n = kv3_normalize(nsum);
-    a.tangent = kv3_normalize(tsum);
-    a.position = kv3_scale(psum, inv);
-    a.sxx = k_fmax(sxx * inv - mx * mx, KF(0.0));
-    a.syy = k_fmax(syy * inv - my * my, KF(0.0));
-    a.sxy = sxy * inv - mx * my;
-    a.layers = lsum * inv;
-    for (c = 0; c < KNIT_MS_COLORS; c++) a.color_w[c] = a.color_w[c] * inv;
-  } else {
-    a.n = kv3(KF(0.0), KF(0.0), KF(1.0));
-    a.tangent = kv3(KF(1.0), KF(0.0), KF(0.0));
-    a.position = kv3(x, y, KF(0.0));
-    a.sxx = KF(0.0);
-    a.syy = KF(0.0);
-    a.sxy = KF(0.0);
-    a.layers = KF(0.0);
-  }
-  return a;
+  return knit_agg_finish(s, x, y);
 }
 
 /* ---- A footprint from ray differentials of known size only ---------------
