@@ -292,10 +292,6 @@ Attrs knit_parameters(const MaterialDesc& md, const std::string& file, Warnings&
     warnings.add(file + ": " + md.path + ".capm_options.max_bend = " + num(p.capm_options.max_bend) +
                  " is not exported: the Cycles shader bends segments by at most " + num(defaults.max_bend) +
                  " radians");
-  const knit::YarnBsdfParams bsdf_defaults;
-  if (b.trans_roughness_x != bsdf_defaults.trans_roughness_x || b.trans_roughness_y != bsdf_defaults.trans_roughness_y)
-    warnings.add(file + ": " + md.path + ".bsdf.trans_roughness_x/_y = " + num(b.trans_roughness_x) + ", " +
-                 num(b.trans_roughness_y) + " is not exported: the Cycles shader has no input for it");
   if (md.knit.footprint_scale != 1.0f && p.mode == knit::KnitMode::MultiScale)
     warnings.add(file + ": " + md.path + ".footprint_scale = " + num(md.knit.footprint_scale) +
                  " is not exported: the Cycles shader's footprint is Cycles' ray cone");
@@ -307,6 +303,8 @@ Attrs knit_parameters(const MaterialDesc& md, const std::string& file, Warnings&
   a.emplace_back("TransmitTint", vec3(tint[0], tint[1], tint[2]));
   a.emplace_back("Roughness", num(b.roughness_x));
   a.emplace_back("RoughnessAcross", num(b.roughness_y));
+  a.emplace_back("TransRoughness", num(b.trans_roughness_x));
+  a.emplace_back("TransRoughnessAcross", num(b.trans_roughness_y));
   a.emplace_back("IOR", num(b.eta));
   a.emplace_back("BodyEnergy", num(b.body_energy));
   a.emplace_back("BodyReflect", num(b.body_reflect));
