@@ -104,7 +104,22 @@ KNIT_STRUCT(KYarnCycles)
   KCyclesLobes w;
   float alpha_x, alpha_y;
   float p0, p1, p2, p3;
+  kvec3 ns; /* the mesh's smooth normal in this frame (yarn_cycles_with_base); 0: no side test */
 KNIT_STRUCT_END(KYarnCycles)
+
+/* Cycles (4.2 and later) lets a closure whose normal n is not the mesh's
+ * smooth normal ns light only from directions wi with
+ *   (ns . wi) (ns . n) (n . wi) >= 0
+ * (bump_shadowing_term in its kernel/closure/bsdf.h: it keeps bump-mapped
+ * normals from taking light from behind opaque geometry): a yarn normal
+ * facing the front of the mesh reflects light from the front only, and
+ * transmits light from behind only. 1 when wi passes, 0 when Cycles drops
+ * it; ns in the local frame (n = +z), either sign. Bump map correction, which
+ * softens diffuse light further, is off for Knit Fabric materials (the
+ * add-on turns it off). */
+KNIT_FN float yarn_cycles_side_ok(kvec3 ns, kvec3 wi) {
+  return kv3_dot(ns, wi) * KZ(ns) * KZ(wi) < KF(0.0) ? KF(0.0) : KF(1.0);
+}
 
 /* Node i (0..7) of the 8-point Gauss-Legendre rule on [0, 1]: the abscissa in
  * KX, its weight in KY (the weights sum to 1). */
@@ -222,6 +237,7 @@ KNIT_FN KYarnCycles yarn_cycles_make(KNIT_IN(KYarnBsdf) p, kvec3 wo) {
   float k = KF(0.5) * p.atten.optical_depth * KFLT(k_maxi(1, k_mini(p.atten.layers, KB_MAX_LAYERS)));
   float fo, body, e_o, w0, w1, w2, w3, sum, inv, thin, share, rest;
   kvec3 mr, mt;
+  c.ns = kv3(KF(0.0), KF(0.0), KF(0.0));
   c.alpha_x = k_fmax(p.spec_r.alpha_x, KB_ALPHA_MIN);
   c.alpha_y = k_fmax(p.spec_r.alpha_y, KB_ALPHA_MIN);
   c.w.spec = KF(0.0);
@@ -265,6 +281,15 @@ KNIT_FN KYarnCycles yarn_cycles_make(KNIT_IN(KYarnBsdf) p, kvec3 wo) {
   return c;
 }
 
+/* c with Cycles' side test (yarn_cycles_side_ok) for the mesh's smooth
+ * normal ns_local, expressed in c's frame: eval, pdf and sample then drop
+ * the directions Cycles drops. */
+KNIT_FN KYarnCycles yarn_cycles_with_base(KNIT_IN(KYarnCycles) c_in, kvec3 ns_local) {
+  KYarnCycles c = c_in;
+  c.ns = ns_local;
+  return c;
+}
+
 /* The closure weights for the view direction wo (local frame, either side):
  * what the OSL shader multiplies its four closures by. */
 KNIT_FN KCyclesLobes yarn_cycles_lobes(KNIT_IN(KYarnBsdf) p, kvec3 wo) {
@@ -279,7 +304,7 @@ KNIT_FN kvec3 yarn_cycles_eval(KNIT_IN(KYarnCycles) c, kvec3 wo, kvec3 wi) {
   kvec3 i = kb_flip_z(wi, s);
   kvec3 hs = kv3_add(o, i);
   float ggx = KF(0.0);
-  if (KZ(wo) * KZ(wi) == KF(0.0)) return KB_BLACK;
+  if (KZ(wo) * KZ(wi) == KF(0.0) || yarn_cycles_side_ok(c.ns, wi) == KF(0.0)) return KB_BLACK;
   if (KZ(i) < KF(0.0)) return kv3_scale(c.w.body_t, -KZ(i) * K_INV_PI);
   if (c.w.spec > KF(0.0) && kv3_len2(hs) > KF(0.0))
     ggx = c.w.spec * mf_refl_core(c.alpha_x, c.alpha_y, o, i, kv3_normalize(hs)) * KZ(i);
@@ -293,7 +318,7 @@ KNIT_FN float yarn_cycles_pdf(KNIT_IN(KYarnCycles) c, kvec3 wo, kvec3 wi) {
   kvec3 i = kb_flip_z(wi, s);
   kvec3 hs = kv3_add(o, i);
   float pg = KF(0.0);
-  if (KZ(wo) * KZ(wi) == KF(0.0)) return KF(0.0);
+  if (KZ(wo) * KZ(wi) == KF(0.0) || yarn_cycles_side_ok(c.ns, wi) == KF(0.0)) return KF(0.0);
   if (KZ(i) < KF(0.0)) return c.p2 * (-KZ(i)) * K_INV_PI;
   if (c.p0 > KF(0.0) && kv3_len2(hs) > KF(0.0))
     pg = c.p0 * mf_refl_pdf_up(c.alpha_x, c.alpha_y, o, kv3_normalize(hs));

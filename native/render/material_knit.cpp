@@ -203,7 +203,9 @@ PassThrough KnitModelMaterial::resolve(SurfaceInteraction& si, const RayDifferen
     // a pass-through with the probability the mixture would pick it, the
     // others shade the hit (YarnShadedMaterial, the smooth lobes alone).
     si.yarn.cycles = true;
-    si.yarn.cyc = knit::k::yarn_cycles_make(si.yarn.bsdf, to_kvec(si.shading.to_local(-ray.d)));
+    si.yarn.cyc = knit::k::yarn_cycles_with_base(knit::k::yarn_cycles_make(si.yarn.bsdf,
+                                                                           to_kvec(si.shading.to_local(-ray.d))),
+                                                 to_kvec(si.shading.to_local(si.yarn.base.n)));
     const float p3 = si.yarn.cyc.p3;
     if (p3 > 0) {
       if (sampler.get1d() < p3) {

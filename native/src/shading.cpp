@@ -116,6 +116,9 @@ KnitMaterial::KnitMaterial(Pattern pattern, KnitMaterialParams params)
   for (int i = 0; i < 64; ++i)
     for (int j = 0; j < 16; ++j) g += ply_.lookup(6.2831853f * (i + 0.5f) / 64, 0.37f * float(j)).shadow;
   mean_shadow_ = params_.ply_detail ? float(g / (64 * 16)) : 1.0f;
+  // As Cycles renders it: the shader's mean, from the procedural profile.
+  if (params_.ply_detail && params_.bsdf_model == KnitBsdfModel::Cycles)
+    mean_shadow_ = k::ply_mean_shadow(ply_.kernel_params(), 8, 4);
   const YarnBsdfParams& bp = params_.bsdf;
   unshaded_.spec_r = k::bsdf_mf_make(bp.roughness_x, bp.roughness_y, bp.eta);
   unshaded_.spec_t = k::bsdf_mf_make(bp.trans_roughness_x, bp.trans_roughness_y, bp.eta);
@@ -528,41 +531,16 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, const HitRoute& r, Vec3 ray_di
       sh.offset = k::kv3_scale(to_world(d, hit.t, hit.b, hit.n), 1.0f / S);
       return sh;
     }
-    // Shading frame: mean normal, mean tangent made orthogonal to it; then the
-    // LEAN covariance, rotated into that frame, widens the specular lobes.
-    const Vec3 n = k::kv3_normalize(a.n);
-    Vec3 tg = k::kv3_sub(a.tangent, k::kv3_scale(n, k::kv3_dot(a.tangent, n)));
-    if (k::kv3_len(tg) < 1e-4f) tg = k::kv3_cross(k::kv3(0, 1, 0), n);
-    tg = k::kv3_normalize(tg);
-    // cos and sin of the tangent's azimuth atan2(tg.y, tg.x), without the trig.
-    const float txy = std::sqrt(tg.x * tg.x + tg.y * tg.y);
-    const float c = txy > 0 ? tg.x / txy : 1.0f, s = txy > 0 ? tg.y / txy : 0.0f;
-    const float sxx = c * c * a.sxx + 2 * c * s * a.sxy + s * s * a.syy;
-    const float syy = s * s * a.sxx - 2 * c * s * a.sxy + c * c * a.syy;
-    const float sxy = (c * c - s * s) * a.sxy + c * s * (a.syy - a.sxx);
-    const k::KLeanRoughness lr = k::bsdf_lean_to_ggx(bp.roughness_x, bp.roughness_y, sxx, sxy, syy);
-    const Vec3 bt = k::kv3_cross(n, tg);
-    const Vec3 tu = k::kv3_add(k::kv3_scale(tg, lr.cos_u), k::kv3_scale(bt, lr.sin_u));
-    sh.spec_r = k::bsdf_mf_make(std::min(lr.alpha_u, 1.0f), std::min(lr.alpha_v, 1.0f), bp.eta);
-    // The transmission lobe shares the shading frame, whose axes are the
-    // reflection lobe's principal axes. Its own widened roughness has its own
-    // principal axes; its two roughnesses go to the frame axes nearer to them
-    // (within 45 degrees), so an anisotropic lobe is never turned by 90.
-    {
-      const k::KLeanRoughness lt =
-          k::bsdf_lean_to_ggx(bp.trans_roughness_x, bp.trans_roughness_y, sxx, sxy, syy);
-      // The axes are more than 45 degrees apart (modulo 180) when the cosine
-      // of twice the angle between them is negative.
-      const float cos2d = (lt.cos_u * lt.cos_u - lt.sin_u * lt.sin_u) * (lr.cos_u * lr.cos_u - lr.sin_u * lr.sin_u) +
-                          4 * lt.cos_u * lt.sin_u * lr.cos_u * lr.sin_u;
-      const bool swap = cos2d < 0;
-      const float au = swap ? lt.alpha_v : lt.alpha_u, av = swap ? lt.alpha_u : lt.alpha_v;
-      sh.spec_t = k::bsdf_mf_make(std::min(au, 1.0f), std::min(av, 1.0f), bp.eta);
-    }
-    const Vec3 local_t = tu, local_n = n, local_b = k::kv3_cross(n, tu);
-    sh.st = to_world(local_t, hit.t, hit.b, hit.n);
-    sh.sb = to_world(local_b, hit.t, hit.b, hit.n);
-    sh.sn = to_world(local_n, hit.t, hit.b, hit.n);
+    // Shading frame: mean normal, mean tangent made orthogonal to it; the
+    // LEAN covariance, rotated into that frame, widens the specular lobes
+    // (knit_ms_lobe, which the OSL shader calls too).
+    const k::KMsLobe lobe = k::knit_ms_lobe(a.n, a.tangent, a.sxx, a.sxy, a.syy, bp.roughness_x, bp.roughness_y,
+                                            bp.trans_roughness_x, bp.trans_roughness_y);
+    sh.spec_r = k::bsdf_mf_make(lobe.alpha_u, lobe.alpha_v, bp.eta);
+    sh.spec_t = k::bsdf_mf_make(lobe.trans_alpha_u, lobe.trans_alpha_v, bp.eta);
+    sh.st = to_world(lobe.t, hit.t, hit.b, hit.n);
+    sh.sb = to_world(lobe.b, hit.t, hit.b, hit.n);
+    sh.sn = to_world(lobe.n, hit.t, hit.b, hit.n);
     const Vec3 d = k::kv3_sub(a.position, k::kv3(xc, yc, top));
     sh.offset = k::kv3_scale(to_world(d, hit.t, hit.b, hit.n), 1.0f / S);
     return sh;
@@ -632,7 +610,11 @@ void KnitMaterial::shade_yarn(const BaseHit& hit, const k::KnitLineHit& h, const
     ref = k::kv3_normalize(ref);
     const Vec3 tt = k::kv3_normalize(h.tangent);
     const float phi = std::atan2(k::kv3_dot(N, k::kv3_cross(tt, ref)), k::kv3_dot(N, ref));
-    const k::KPlyShade ps = ply_.lookup(phi, ply_arc(h.t, h.row));
+    // (As Cycles renders it: the procedural profile the shader evaluates,
+    // not the table.)
+    const k::KPlyShade ps = params_.bsdf_model == KnitBsdfModel::Cycles
+                                ? k::ply_shade_procedural(ply_.kernel_params(), phi, ply_arc(h.t, h.row))
+                                : ply_.lookup(phi, ply_arc(h.t, h.row));
     sh.point.shadow = ps.shadow;
     lt = to_world(ps.t, T, lb, N);
     ln = to_world(ps.n, T, lb, N);

@@ -313,6 +313,54 @@ TEST(BsdfCycles, WhiteFurnaceAlbedoNeverExceedsOne) {
   std::printf("[cycles furnace] max directional albedo %.4f at %s\n", worst, at.c_str());
 }
 
+// Cycles' side test (yarn_cycles_side_ok): with the mesh's normal along the
+// yarn's, nothing is dropped; tilted, eval and pdf are exactly zero for the
+// directions (ns.wi)(ns.n)(n.wi) < 0 and unchanged elsewhere, sampling never
+// returns a dropped direction, and the albedo only falls.
+TEST(BsdfCycles, SideTestDropsWhatCyclesDropsAndNothingElse) {
+  const Vec3 white{1.f, 1.f, 1.f};
+  const k::KYarnBsdf yb = k::yarn_bsdf_make(k::bsdf_mf_make(0.2f, 0.4f, 1.55f), k::bsdf_mf_make(0.3f, 0.6f, 1.55f),
+                                            white, white, 0.8f, 0.6f, 1.f, k::bsdf_att_make(0.5f, 1));
+  const Vec3 wo = dir_deg(35.0, 10.0);
+  const k::KYarnCycles c = k::yarn_cycles_make(yb, wo);
+  const k::KYarnCycles same = k::yarn_cycles_with_base(c, v3(0.f, 0.f, 1.f));
+  const Vec3 ns = k::kv3_normalize(v3(0.6f, 0.1f, 0.4f));  // the mesh's normal, 53 degrees from the yarn's
+  const k::KYarnCycles tilted = k::yarn_cycles_with_base(c, ns);
+  Rng rng(5);
+  int dropped = 0, kept = 0;
+  for (int i = 0; i < 4000; ++i) {
+    const Vec3 wi = k::kv3_normalize(v3(2 * rng.uniform() - 1, 2 * rng.uniform() - 1, 2 * rng.uniform() - 1));
+    const Vec3 e = k::yarn_cycles_eval(c, wo, wi), es = k::yarn_cycles_eval(same, wo, wi),
+               et = k::yarn_cycles_eval(tilted, wo, wi);
+    EXPECT_EQ(e.x, es.x);
+    EXPECT_EQ(k::yarn_cycles_pdf(c, wo, wi), k::yarn_cycles_pdf(same, wo, wi));
+    const double test = double(k::kv3_dot(ns, wi)) * ns.z * wi.z;
+    if (test < 0) {
+      ++dropped;
+      EXPECT_EQ(et.x, 0.f);
+      EXPECT_EQ(k::yarn_cycles_pdf(tilted, wo, wi), 0.f);
+    } else {
+      ++kept;
+      EXPECT_EQ(et.x, e.x);
+      EXPECT_EQ(k::yarn_cycles_pdf(tilted, wo, wi), k::yarn_cycles_pdf(c, wo, wi));
+    }
+  }
+  EXPECT_GT(dropped, 400);
+  EXPECT_GT(kept, 400);
+  double a = 0, at = 0;
+  const int n = 100000;
+  for (int i = 0; i < n; ++i) {
+    const float u1 = rng.uniform(), u2 = rng.uniform();
+    const k::KBsdfSample s = k::yarn_cycles_sample(c, wo, u1, u2), st = k::yarn_cycles_sample(tilted, wo, u1, u2);
+    a += s.weight.x;
+    at += st.weight.x;
+    if (st.pdf > 0 && !k::kb_has_flag(st.flags, KB_DELTA)) EXPECT_EQ(k::yarn_cycles_side_ok(ns, st.wi), 1.f);
+  }
+  std::printf("[cycles side test] albedo %.4f without, %.4f with the mesh's normal 53 degrees off the yarn's\n",
+              a / n, at / n);
+  EXPECT_LT(at / n, a / n - 0.01);
+}
+
 k::KYarnBsdf random_yarn(Rng& rng) {
   auto pick = [&](float lo, float hi) {
     const float u = rng.uniform();

@@ -337,6 +337,27 @@ void expect_white_furnace(const RgbImage& img, const char* what) {
   EXPECT_LT(worst_block, 0.03) << what;
 }
 
+// A furnace where the renderer is meant to lose light, but never to make
+// it: Cycles' side test (knit::k::yarn_cycles_side_ok) drops the light a
+// yarn normal tilted against the mesh's would take from the mesh's other
+// side. The mean stays within [min_mean, 1.01], no 8x8 block above 1.03.
+void expect_lossy_furnace(const RgbImage& img, const char* what, double min_mean) {
+  const double mean = test::mean_channel_value(img);
+  double brightest = 0;
+  for (int by = 0; by < img.height; by += 8)
+    for (int bx = 0; bx < img.width; bx += 8) {
+      double s = 0;
+      for (int y = by; y < by + 8; ++y)
+        for (int x = bx; x < bx + 8; ++x) s += img.at(x, y).mean();
+      brightest = std::max(brightest, s / 64);
+    }
+  std::printf("[furnace] %s: mean %.5f (error %.3f%%), brightest 8x8 block %.5f\n", what, mean, 100 * (mean - 1),
+              brightest);
+  EXPECT_GT(mean, min_mean) << what;
+  EXPECT_LT(mean, 1.01) << what;
+  EXPECT_LT(brightest, 1.03) << what;
+}
+
 // Multi-scale past a diffuse bounce (no differentials): the ray's cone
 // (RayDifferential::cone_width) gives the footprint; a cone covering stitch
 // cells is shaded from the class table, a narrow one (or none) as a point.
@@ -556,12 +577,16 @@ TEST(KnitFurnace, MultiScale) {
 // lossless yarn is a translucent() closure of weight 1 (the body
 // transmission's albedo; no GGX, no transparent() weight), shaded at the
 // base hit without self-shadowing; multi-scale footprints are all marched.
+// Cycles' side test drops the light that yarn normals tilted against the
+// mesh's take from the mesh's other side: 13% of the furnace's light in the
+// near field (the mixture without the test conserves energy:
+// tests/native/test_bsdf_cycles.cpp).
 TEST(KnitFurnace, CyclesNearField) {
   const auto r = test::render_text(test::test_dir(), furnace_scene("near_field", false, "cycles"));
   EXPECT_EQ(r.result.stats.invalid_samples, 0u);
   EXPECT_GT(r.result.stats.resolve_passes, 0u);
   EXPECT_EQ(r.result.stats.shell_bounces, 0u);  // (no bounces inside the shell)
-  expect_white_furnace(r.image, "cycles, near field");
+  expect_lossy_furnace(r.image, "cycles, near field", 0.8);
 }
 
 TEST(KnitFurnace, CyclesMultiScale) {
@@ -569,7 +594,7 @@ TEST(KnitFurnace, CyclesMultiScale) {
   EXPECT_EQ(r.result.stats.invalid_samples, 0u);
   EXPECT_EQ(r.result.stats.table_resolves, 0u);
   EXPECT_GT(r.result.stats.aggregate_resolves, r.result.stats.camera_resolves / 2);
-  expect_white_furnace(r.image, "cycles, multi-scale");
+  expect_lossy_furnace(r.image, "cycles, multi-scale", 0.8);
 }
 
 TEST(KnitFurnace, ExplicitYarns) {
@@ -762,9 +787,10 @@ RenderResult render_desc(const SceneDesc& d, bool explicit_yarns) {
 // option. Its render at the golden test's samples is compared with
 // knit_near_field's reference (4,096 samples): the option renders what
 // Cycles renders, without self-shadowing and with Cycles' closures, so it
-// differs from the exact near field by what docs/cycles.md measures (the two
-// references: -4.5% bias, 25% RMSE over 4x4 blocks), within the bounds
-// below; and it is not the exact near field (the option switches).
+// differs from the exact near field by what docs/cycles.md measures (the
+// golden render against the exact reference: -10.3% bias, 28.5% RMSE over
+// 4x4 blocks, Cycles' side test included), within the bounds below; and it
+// is not the exact near field (the option switches).
 TEST(KnitCycles, GoldenSceneIsNearTheExactNearFieldButNotIt) {
   const std::string g = test::source_dir() + "/tests/render/golden/";
   const SceneDesc cycles = load_scene_file(g + "knit_cycles/scene.json");
@@ -781,7 +807,7 @@ TEST(KnitCycles, GoldenSceneIsNearTheExactNearFieldButNotIt) {
   std::printf("[cycles golden] against the exact near field's reference: bias %+.3f, RMSE %.3f per pixel, %.3f over "
               "4x4 blocks (the exact near field's own render: %+.3f, %.3f, %.3f)\n",
               px.rel_bias, px.rel_rmse, bl.rel_rmse, epx.rel_bias, epx.rel_rmse, ebl.rel_rmse);
-  EXPECT_LT(std::fabs(px.rel_bias), 0.08);
+  EXPECT_LT(std::fabs(px.rel_bias), 0.15);
   EXPECT_LT(bl.rel_rmse, 0.35);
   // ... and well beyond the noise of a render of the exact near field itself.
   EXPECT_GT(bl.rel_rmse, 2 * ebl.rel_rmse);
