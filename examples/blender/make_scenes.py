@@ -9,11 +9,11 @@ Knitshade add-on's API (scene_json.py says how each part converts).
 (or the same arguments after `python make_scenes.py --` in a Python with
 PyPI's bpy). Writes DIR/<scene>.blend, and with --render also renders it
 in Cycles (CPU) at that many samples to DIR/<scene>.png. The Knit Fabric
-materials are plain Blender data: where this Blender has OSL their shader is compiled into the file, which
-then renders in any Blender with OSL, add-on or not. --yarns on (or auto in
-a Blender without OSL) also lays the yarns on the knit objects as curves
-(Generate Yarn Geometry), which render in any Blender from 3.4 on. Images
-are packed into the files.
+materials are plain Blender data: where this Blender has OSL their shader
+is compiled into the file, which then renders in any Blender with OSL,
+add-on or not. --yarns on (or auto in a Blender without OSL) also lays the
+yarns on the knit objects as curves (Generate Yarn Geometry), which render
+in any Blender from 3.4 on. Images are packed into the files.
 """
 import argparse
 import os
