@@ -557,7 +557,13 @@ CyclesExport export_cycles(const SceneDesc& desc, const CyclesExportOptions& opt
       // The fabric emits nothing: never sample its triangles as lights
       // (Cycles decides from a scan of the shader's bytecode for
       // "emission" otherwise; an earlier shader's error colour was one).
-      x.open("shader", {{"name", md.path}, {"emission_sampling_method", "none"}});
+      // Bump map correction off, as the add-on sets it: left on, Cycles
+      // bends the microfacet closure's normal and softens diffuse light at
+      // the yarn normals, which the native "as Cycles renders it" option
+      // does not model (the swatch of tests/cycles/render_standalone.py
+      // renders 10% brighter under a sun with it on).
+      x.open("shader", {{"name", md.path}, {"emission_sampling_method", "none"},
+                        {"use_bump_map_correction", "false"}});
     else
       x.open("shader", {{"name", md.path}});
     switch (md.type) {

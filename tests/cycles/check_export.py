@@ -356,6 +356,7 @@ def check_curvature(what, P, N, verts, uv, tangent):
 def check_knit(name, mname, m, sh, nodes, links, scene_dir, out_dir, cli, curved):
     what = f"{name}: {mname}"
     check(sh.get("emission_sampling_method") == "none", f"{what}: the fabric is sampled as a light")
+    check(sh.get("use_bump_map_correction") == "false", f"{what}: bump map correction is left on")
     knits = [n for n in nodes.values() if n.tag == "osl_shader"]
     if not check(len(knits) == 1, f"{what}: {len(knits)} script nodes"):
         return

@@ -1,6 +1,7 @@
 """The knit shader in Blender's Cycles against the native renderer rendering
 the model as Cycles does (a knit material's "bsdf_model": "cycles",
-docs/cycles.md): the same scenes, built once as native scene JSON and once
+docs/cycles.md): the flat swatch and the half cylinder of
+tests/cycles/comparison_scenes.py, built once as native scene JSON and once
 in Blender through the add-on's API (the material a user gets), rendered
 with two seeds each; the Cycles image must match the native one within the
 noise of the two.
@@ -19,8 +20,6 @@ import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-MESHES = os.path.join(ROOT, "examples", "scenes", "meshes")
-PATTERNS = os.path.join(ROOT, "examples", "patterns")
 
 try:
     import bpy
@@ -44,29 +43,14 @@ CLI = os.environ.get("KNIT_CLI", os.path.join(ROOT, "build", "knitshade"))
 OUT = os.environ.get("KNIT_TEST_OUT") or tempfile.mkdtemp(prefix="knit-native-cycles-")
 os.makedirs(OUT, exist_ok=True)
 
-SUN = {"type": "directional", "to_light": [0.3, -0.5, 1.0], "irradiance": [3.0, 2.9, 2.8]}
-SKY = {"type": "environment", "color": [0.06, 0.065, 0.075]}
+sys.path.insert(0, os.path.join(ROOT, "tests", "cycles"))
+from comparison_scenes import scenes as comparison_scenes  # noqa: E402
 
 
 def scenes(size, spp):
-    film = {"width": size, "height": size, "spp": spp, "seed": 1}
-    wool = {"type": "knit", "yarn_colors": [[0.72, 0.30, 0.16], [0.85, 0.80, 0.70]],
-            "bsdf": {"body_energy": 0.85, "body_reflect": 0.7, "optical_depth": 1.0},
-            "bsdf_model": "cycles", "mode": "near_field"}
-    swatch = {"version": 1, "film": film, "integrator": {"max_depth": 8},
-              "camera": {"position": [0.0, -0.28, 0.36], "look_at": [0.0, 0.0, 0.0], "up": [0, 1, 0], "fov": 40},
-              "lights": [SKY, SUN],
-              "materials": {"wool": dict(wool, pattern=os.path.join(PATTERNS, "diamond_blocks_2colour.knit"),
-                                         uv_scale=60)},
-              "objects": [{"name": "swatch", "mesh": os.path.join(MESHES, "quad.obj"), "material": "wool"}]}
-    cylinder = {"version": 1, "film": film, "integrator": {"max_depth": 8},
-                "camera": {"position": [0.0, -1.3, 3.3], "look_at": [0.0, 0.0, 0.45], "up": [0, 1, 0], "fov": 42},
-                "lights": [SKY, SUN],
-                "materials": {"wool": dict(wool, pattern=os.path.join(PATTERNS, "rib_2x2.knit"), uv_scale=160,
-                                           yarn_colors=[[0.82, 0.72, 0.58]])},
-                "objects": [{"name": "half cylinder", "mesh": os.path.join(MESHES, "half_cylinder.obj"),
-                             "material": "wool"}]}
-    return {"swatch": swatch, "half_cylinder": cylinder}
+    """The flat swatch and the half cylinder of tests/cycles/comparison_scenes.py."""
+    all_scenes = comparison_scenes(size, spp)
+    return {name: all_scenes[name] for name in ("swatch", "half_cylinder")}
 
 
 # ---- native ----------------------------------------------------------------
