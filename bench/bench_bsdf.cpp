@@ -1,6 +1,7 @@
 // Cost of the near-field yarn BSDF: eval and sample per lobe and for the whole
-// mixture, pdf, the ply profile (table lookup vs closed form), and the
-// validated host wrapper. Directions and random numbers cycle through
+// mixture, pdf, the ply profile (table lookup vs closed form), the validated
+// host wrapper, and the closure weights the Cycles option (and the OSL shader)
+// computes per shading point. Directions and random numbers cycle through
 // precomputed arrays, so the figures are the kernel's cost per call.
 #include <benchmark/benchmark.h>
 
@@ -129,6 +130,19 @@ void BM_Yarn_HostEval(benchmark::State& st) {
   run(st, [&](const Inputs& in, int i) { return b.eval(in.wo[i], in.wi[i], pt); });
 }
 
+// ---- As Cycles renders it (bsdf_cycles.h): what the shader computes per point --
+
+void BM_Cycles_Make(benchmark::State& st) {
+  k::KYarnBsdf y = yarn();
+  run(st, [&](const Inputs& in, int i) { return k::yarn_cycles_make(y, in.wo[i]).w.spec; });
+}
+void BM_Cycles_VndfMeans(benchmark::State& st) {
+  run(st, [&](const Inputs& in, int i) { return k::bsdf_cycles_vndf_means(0.3f, 0.6f, in.wo[i], 1.55f, 1.f); });
+}
+void BM_Cycles_TransmitMean(benchmark::State& st) {
+  run(st, [&](const Inputs& in, int i) { return k::bsdf_cycles_transmit_mean(0.5f + in.u1[i], 1.55f); });
+}
+
 // ---- Ply profile --------------------------------------------------------------
 
 void BM_Ply_TableLookup(benchmark::State& st) {
@@ -158,6 +172,9 @@ BENCHMARK(BM_Yarn_Pdf);
 BENCHMARK(BM_Yarn_Sample);
 BENCHMARK(BM_Yarn_SampleWithGaps);
 BENCHMARK(BM_Yarn_HostEval);
+BENCHMARK(BM_Cycles_Make);
+BENCHMARK(BM_Cycles_VndfMeans);
+BENCHMARK(BM_Cycles_TransmitMean);
 BENCHMARK(BM_Ply_TableLookup);
 BENCHMARK(BM_Ply_Procedural);
 BENCHMARK(BM_Ply_BuildTable);

@@ -80,7 +80,9 @@
 #define KNIT_KERNEL_BSDF_CYCLES_H
 
 /* Points of the fixed lattice over the visible normals (u1 = (i + 1/2) / N,
- * u2 = frac(i YC_VNDF_STEP / N + 1/(2N)); 21 and 13 are Fibonacci numbers). */
+ * u2 = frac(i YC_VNDF_STEP / N + 1/(2N)); 21 and 13 are Fibonacci numbers).
+ * bsdf_cycles_vndf_means holds them as a table of disk points: change the
+ * two together. */
 #define YC_VNDF_POINTS 21
 #define YC_VNDF_STEP 13
 /* Selection weight floor of a lobe that is not zero (as YB_LOBE_FLOOR). */
@@ -165,17 +167,18 @@ KNIT_FN float bsdf_cycles_ls_albedo(float mu_o, float eta) {
  * here by an 8 x 8 Gauss-Legendre product rule: within 3e-5 of C for
  * k <= 2, 2e-4 at k = 4, 0.3% at k = 10 (where C is 0.004). */
 KNIT_FN float bsdf_cycles_transmit_mean(float k, float eta) {
+  /* cos(pi x / 2) at bsdf_cycles_gl8's nodes x, and its weights */
+  float cn[8] = { KF(0.999513685), KF(0.987275388), KF(0.931367258), KF(0.801301418), KF(0.598260844), KF(0.364081077), KF(0.159019835), KF(0.031183218) };
+  float wn[8] = { KF(0.050614268), KF(0.111190517), KF(0.156853323), KF(0.181341892), KF(0.181341892), KF(0.156853323), KF(0.111190517), KF(0.050614268) };
   float sum = KF(0.0);
   int i, j;
   for (i = 0; i < 8; i++) {
-    kvec3 gs = bsdf_cycles_gl8(i);
-    float rho = k_cos(K_PI_2 * KX(gs));
+    float rho = cn[i];
     for (j = 0; j < 8; j++) {
-      kvec3 gt = bsdf_cycles_gl8(j);
-      float cp = k_cos(K_PI_2 * KX(gt));
+      float cp = cn[j];
       float mu = rho * cp;
       float l = cp >= rho * KB_CHORD_MAX ? KB_CHORD_MAX : cp / rho;
-      sum = sum + KY(gs) * KY(gt) * rho * k_exp(-k * l) * (KF(1.0) - bsdf_cycles_fresnel(mu, eta)) * mu;
+      sum = sum + wn[i] * wn[j] * rho * k_exp(-k * l) * (KF(1.0) - bsdf_cycles_fresnel(mu, eta)) * mu;
     }
   }
   return sum * K_PI;
@@ -193,14 +196,15 @@ KNIT_FN kvec3 bsdf_cycles_vndf_means(float ax_in, float ay_in, kvec3 o, float et
   float lo = mf_ggx_zlambda(ax, ay, o);
   float sf = KF(0.0), sg = KF(0.0), st = KF(0.0);
   float inv = KF(1.0) / KFLT(YC_VNDF_POINTS);
+  /* the lattice's points on the unit disk, sqrt(u1) (cos, sin)(2 pi u2) */
+  float dx[YC_VNDF_POINTS] = { KF(0.152579909), KF(-0.166634659), KF(-0.025784332), KF(0.299267173), KF(-0.462910050), KF(0.375151256), KF(-0.041575986), KF(-0.372606424), KF(0.629103081), KF(-0.555722176), KF(0.157346061), KF(0.370006435), KF(-0.737240425), KF(0.722382176), KF(-0.303579748), KF(-0.313873495), KF(0.798623544), KF(-0.872314635), KF(0.469295318), KF(0.214426537), KF(-0.816343342) };
+  float dy[YC_VNDF_POINTS] = { KF(0.022997721), KF(-0.208953253), KF(0.344067998), KF(-0.277679357), KF(0.000000000), KF(0.348089496), KF(-0.554792977), KF(0.467233678), KF(-0.094822033), KF(-0.378884964), KF(0.689378138), KF(-0.640869944), KF(0.227408554), KF(0.347880921), KF(-0.773508582), KF(0.799736624), KF(-0.384596829), KF(-0.269073430), KF(0.812843334), KF(-0.939464043), KF(0.556573467) };
+  KVndfFrame vf = mf_ggx_vndf_frame(ax, ay, o);
   int i;
   for (i = 0; i < YC_VNDF_POINTS; i++) {
-    float u1 = (KFLT(i) + KF(0.5)) * inv;
-    float u2 = (KFLT(i * YC_VNDF_STEP) + KF(0.5)) * inv;
     kvec3 h, r;
     float oh, den, g, f;
-    u2 = u2 - k_floor(u2);
-    h = mf_ggx_sample_vndf(ax, ay, o, u1, u2);
+    h = mf_ggx_vndf_from_disk(vf, ax, ay, dx[i], dy[i]);
     oh = kv3_dot(o, h);
     if (oh > KF(0.0) && KZ(h) > KF(0.0)) {
       r = kv3_normalize(kv3_sub(kv3_scale(h, KF(2.0) * oh), o));

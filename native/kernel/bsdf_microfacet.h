@@ -125,22 +125,40 @@ KNIT_FN float mf_ggx_vndf(float ax, float ay, kvec3 wo, kvec3 h) {
 
 /* A microfacet normal drawn from D_wo(h) (Heitz 2018, JCGT 7(4)): stretch wo
  * to the unit-roughness configuration, sample the projected hemisphere as a
- * disk whose far half is squashed by (1 + Vh.z)/2, unstretch. wo.z > 0. */
+ * disk whose far half is squashed by (1 + Vh.z)/2, unstretch. wo.z > 0.
+ * In two parts, for callers that draw many normals for one wo: the
+ * stretched view's frame (mf_ggx_vndf_frame), and the normal for a point
+ * (p1, p2) of the unit disk (mf_ggx_vndf_from_disk). */
+KNIT_STRUCT(KVndfFrame)
+  kvec3 vh; /* the stretched view direction */
+  kvec3 t1; /* two axes across it */
+  kvec3 t2;
+  float sq; /* (1 + vh.z) / 2, the squash of the disk's far half */
+KNIT_STRUCT_END(KVndfFrame)
+
+KNIT_FN KVndfFrame mf_ggx_vndf_frame(float ax, float ay, kvec3 wo) {
+  KVndfFrame f;
+  float lensq;
+  f.vh = kv3_normalize(kv3(ax * KX(wo), ay * KY(wo), KZ(wo)));
+  lensq = KX(f.vh) * KX(f.vh) + KY(f.vh) * KY(f.vh);
+  f.t1 = lensq > KF(0.0) ? kv3_scale(kv3(-KY(f.vh), KX(f.vh), KF(0.0)), KF(1.0) / k_sqrt(lensq))
+                         : kv3(KF(1.0), KF(0.0), KF(0.0));
+  f.t2 = kv3_cross(f.vh, f.t1);
+  f.sq = KF(0.5) * (KF(1.0) + KZ(f.vh));
+  return f;
+}
+
+KNIT_FN kvec3 mf_ggx_vndf_from_disk(KNIT_IN(KVndfFrame) f, float ax, float ay, float p1, float p2) {
+  float p2s = (KF(1.0) - f.sq) * k_safe_sqrt(KF(1.0) - p1 * p1) + f.sq * p2;
+  kvec3 nh = kv3_add(kv3_add(kv3_scale(f.t1, p1), kv3_scale(f.t2, p2s)),
+                     kv3_scale(f.vh, k_safe_sqrt(KF(1.0) - p1 * p1 - p2s * p2s)));
+  return kv3_normalize(kv3(ax * KX(nh), ay * KY(nh), k_fmax(KZ(nh), KF(0.0))));
+}
+
 KNIT_FN kvec3 mf_ggx_sample_vndf(float ax, float ay, kvec3 wo, float u1, float u2) {
-  kvec3 vh = kv3_normalize(kv3(ax * KX(wo), ay * KY(wo), KZ(wo)));
-  float lensq = KX(vh) * KX(vh) + KY(vh) * KY(vh);
-  kvec3 t1 = lensq > KF(0.0) ? kv3_scale(kv3(-KY(vh), KX(vh), KF(0.0)), KF(1.0) / k_sqrt(lensq))
-                             : kv3(KF(1.0), KF(0.0), KF(0.0));
-  kvec3 t2 = kv3_cross(vh, t1);
   float r = k_sqrt(k_clampf(u1, KF(0.0), KF(1.0)));
   float phi = K_2PI * u2;
-  float p1 = r * k_cos(phi);
-  float p2 = r * k_sin(phi);
-  float sq = KF(0.5) * (KF(1.0) + KZ(vh));
-  float p2s = (KF(1.0) - sq) * k_safe_sqrt(KF(1.0) - p1 * p1) + sq * p2;
-  kvec3 nh = kv3_add(kv3_add(kv3_scale(t1, p1), kv3_scale(t2, p2s)),
-                     kv3_scale(vh, k_safe_sqrt(KF(1.0) - p1 * p1 - p2s * p2s)));
-  return kv3_normalize(kv3(ax * KX(nh), ay * KY(nh), k_fmax(KZ(nh), KF(0.0))));
+  return mf_ggx_vndf_from_disk(mf_ggx_vndf_frame(ax, ay, wo), ax, ay, r * k_cos(phi), r * k_sin(phi));
 }
 
 /* f (cosine NOT included, Fresnel NOT included) of the reflection
