@@ -261,14 +261,14 @@ class PyKnitSurface {
     const Vec3 wl = k::kv3_normalize(k::kv3(float(wi.data()[0]), float(wi.data()[1]), float(wi.data()[2])));
     const ssize_t n = P.n;
     ::py::array_t<double> pd(n), layers(n), steps(n), nor = vec_array(n), tan = vec_array(n), sig = vec_array(n);
-    ::py::array_t<int> pts(n), hits(n);
+    ::py::array_t<int> pts(n), hits(n), pick(n);
     ::py::array_t<double> cw({n, ssize_t(KNIT_MS_COLORS)});
     {
       const KnitSurface& S = surf_;
       double *o_pd = pd.mutable_data(), *o_layers = layers.mutable_data(), *o_steps = steps.mutable_data();
       double *o_nor = nor.mutable_data(), *o_tan = tan.mutable_data(), *o_sig = sig.mutable_data();
       double* o_cw = cw.mutable_data();
-      int *o_pts = pts.mutable_data(), *o_hits = hits.mutable_data();
+      int *o_pts = pts.mutable_data(), *o_hits = hits.mutable_data(), *o_pick = pick.mutable_data();
       for_each_row(n, [&](ssize_t i) {
         const float x = sc * float(P.pu[P.su ? 0 : i]), y = sc * float(P.pv[P.sv ? 0 : i]);
         const k::KnitAggregate a = k::knit_aggregate(
@@ -279,6 +279,7 @@ class PyKnitSurface {
         o_steps[i] = a.steps;
         o_pts[i] = a.points;
         o_hits[i] = a.hits;
+        o_pick[i] = a.color_pick;
         put(o_nor + 3 * i, a.n);
         put(o_tan + 3 * i, a.tangent);
         put(o_sig + 3 * i, k::kv3(a.sxx, a.sxy, a.syy));
@@ -295,6 +296,7 @@ class PyKnitSurface {
     d["points"] = pts;
     d["hits"] = hits;
     d["color_weights"] = cw;
+    d["color_pick"] = pick;
     return d;
   }
 
@@ -430,7 +432,33 @@ are marched with CAPM along -wi_local (normalised; z < 0 views the fabric
 from behind) on a base of curvature (kx, ky).
 Returns a dict of arrays: p_delta (pass-through probability), normal and
 tangent (N,3, means), sigma (N,3: LEAN slope covariance xx, xy, yy), layers,
-steps (mean CAPM segments), points, hits, color_weights (N,8).)doc");
+steps (mean CAPM segments), points, hits, color_weights (N,8), color_pick
+(the colour index of one hit, picked by the shift as the OSL shader's
+ColourIndex output is; -1 when no point hits).)doc");
+
+  m.def(
+      "footprint_isotropic",
+      [](double len_x, double len_y, const Arr& view, double uv_scale) {
+        check_finite("len_x", &len_x, 1);
+        check_finite("len_y", &len_y, 1);
+        if (view.ndim() != 1 || view.shape(0) != 3) throw ::py::value_error("view_local must have shape (3,)");
+        check_finite_rows("view_local", view);
+        if (!std::isfinite(uv_scale) || !(uv_scale > 0))
+          throw ::py::value_error("uv_scale must be finite and > 0, got " + num(uv_scale));
+        const double* w = view.data();
+        const k::KFootprintAxes f = k::knit_footprint_isotropic(
+            float(len_x), float(len_y), k::kv3(float(w[0]), float(w[1]), float(w[2])), float(uv_scale));
+        return ::py::make_tuple(::py::make_tuple(f.fx.x, f.fx.y), ::py::make_tuple(f.fy.x, f.fy.y));
+      },
+      ::py::arg("len_x"), ::py::arg("len_y"), ::py::arg("view_local"), ::py::arg("uv_scale"), R"doc(
+The multi-scale footprint the OSL shader builds from Cycles' UV
+differentials (kernel knit_footprint_isotropic, docs/cycles.md): len_x,
+len_y the lengths of the two UV differentials, view_local the view
+direction in the base frame (x along +u, y along +v, z the normal),
+uv_scale pattern units per UV unit. Returns (fx, fy), two (x, y) pairs in
+pattern units: a square of side uv_scale (len_x + len_y) / 2 stretched by
+1 / max(cos theta, 0.1) along the view's projection. Divided by uv_scale
+they are KnitSurface.aggregate's footprint_x, footprint_y.)doc");
 
   m.def(
       "explicit_yarns",
