@@ -285,12 +285,15 @@ k::KnitCapm KnitMaterial::march_state(const BaseHit& hit, const k::KnitCapm& sta
   if (frame) return surface_.march(start, ray_dir, frame, params_.capm_options, blocked_only, hit.frame_hint);
   const float S = hit.pattern_per_world;
   const float kx = hit.kx / S, ky = hit.ky / S;
+  return k::knit_capm_march_curved(surface_.geom(), surface_.codes(), surface_.colors(), start, x, y,
+                                   k::kv3_normalize(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n)), kx, ky,
+                                   curved_segment(kx, ky), params_.capm_options.max_steps, blocked_only ? 1 : 0);
+}
+
+float KnitMaterial::curved_segment(float kx, float ky) const {
   const float kmax = std::max(std::abs(kx), std::abs(ky));
   const CapmOptions& o = params_.capm_options;
-  const float seg = kmax > 0 ? std::min(o.max_segment, o.max_bend / kmax) : o.max_segment;
-  return k::knit_capm_march_curved(surface_.geom(), surface_.codes(), surface_.colors(), start, x, y,
-                                   k::kv3_normalize(k::kv3_to_local(ray_dir, hit.t, hit.b, hit.n)), kx, ky, seg,
-                                   o.max_steps, blocked_only ? 1 : 0);
+  return kmax > 0 ? std::min(o.max_segment, o.max_bend / kmax) : o.max_segment;
 }
 
 int KnitMaterial::footprint_points_for(Vec3 fx, Vec3 fy) const {
@@ -499,7 +502,7 @@ KnitShade KnitMaterial::shade(const BaseHit& hit, const HitRoute& r, Vec3 ray_di
       // contributes its curvature there (pattern units).
       const Vec3 kap = frame ? frame->curvature(xc, yc) : k::kv3(hit.kx / S, hit.ky / S, 0);
       a = k::knit_aggregate(surface_.geom(), surface_.codes(), surface_.colors(), xc, yc, fx, fy, wi, points,
-                            shift[0], shift[1], kap.x, kap.y, params_.capm_options.max_segment,
+                            shift[0], shift[1], kap.x, kap.y, curved_segment(kap.x, kap.y),
                             params_.capm_options.max_steps);
       sh.aggregated = true;
     }
@@ -651,7 +654,7 @@ float KnitMaterial::transmittance(const BaseHit& hit, const HitRoute& r, Vec3 ra
     // (the curvature only for the marched footprint: a frame lookup)
     const Vec3 kap = frame ? frame->curvature(x, y) : k::kv3(hit.kx / S, hit.ky / S, 0);
     return k::knit_footprint_p_delta(surface_.geom(), surface_.codes(), surface_.colors(), f, wi, kap.x, kap.y,
-                                     params_.capm_options.max_segment, params_.capm_options.max_steps);
+                                     curved_segment(kap.x, kap.y), params_.capm_options.max_steps);
   }
   if (!params_.capm) return shade(hit, r, ray_dir, frame, shift).pass_through ? 1.0f : 0.0f;
   // Hit or miss only (a corrected hit stays a hit: knit_capm_correct keeps

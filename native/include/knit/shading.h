@@ -308,6 +308,10 @@ class KnitMaterial {
   // march without a frame field).
   k::KnitCapm march_state(const BaseHit& hit, const k::KnitCapm& start, Vec3 ray_dir,
                           const FrameProvider* frame, bool blocked_only = false) const;
+  // The longest straight segment of a march on a base of normal curvature
+  // (kx, ky) (pattern units): capm_options' max_segment, shortened so that
+  // the base turns by at most max_bend along it (the OSL shader's rule).
+  float curved_segment(float kx, float ky) const;
   // March from `from`'s yarn point along dir_world (see occluded_from).
   k::KnitCapm march_from(const BaseHit& hit, const KnitShade& from, Vec3 dir_world,
                          const FrameProvider* frame, bool blocked_only = false) const;
