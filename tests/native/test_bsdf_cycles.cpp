@@ -361,6 +361,58 @@ TEST(BsdfCycles, SideTestDropsWhatCyclesDropsAndNothingElse) {
   EXPECT_LT(at / n, a / n - 0.01);
 }
 
+// Cycles' samplers also drop a drawn direction on the wrong side of the
+// surface (yarn_cycles_sample_side_ok), where its evaluation may keep it: a
+// closure normal tilted below the surface reflects light from below when
+// light is sampled, never when the closure is. Sampling then estimates less
+// than the integral of eval (what light sampling alone gives), which is how
+// Cycles renders it under a sky; with the surface's normal above the
+// yarn's hemisphere the two agree.
+TEST(BsdfCycles, SamplingDropsWhatCyclesSamplersDrop) {
+  const Vec3 white{1.f, 1.f, 1.f};
+  const k::KYarnBsdf yb = k::yarn_bsdf_make(k::bsdf_mf_make(0.2f, 0.4f, 1.55f), k::bsdf_mf_make(0.3f, 0.6f, 1.55f),
+                                            white, white, 0.8f, 0.6f, 1.f, k::bsdf_att_make(0.5f, 1));
+  const Vec3 wo = dir_deg(70.0, 0.0);
+  const k::KYarnCycles c = k::yarn_cycles_make(yb, wo);
+  Rng rng(11);
+  const int n = 200000;
+  for (const Vec3 ns_in : {v3(0.6f, 0.1f, 0.4f), v3(0.9f, 0.f, -0.3f)}) {
+    const Vec3 ns = k::kv3_normalize(ns_in);
+    const bool below = ns.z < 0;  // the surface's normal below the closure's hemisphere
+    ASSERT_GT(k::kv3_dot(ns, wo), 0.f);  // the viewer on the surface's front
+    const k::KYarnCycles t = k::yarn_cycles_with_base(c, ns);
+    double sampled = 0, integral = 0;
+    int unreachable = 0;
+    for (int i = 0; i < n; ++i) {
+      const k::KBsdfSample s = k::yarn_cycles_sample(t, wo, rng.uniform(), rng.uniform());
+      if (s.pdf > 0 && !k::kb_has_flag(s.flags, KB_DELTA)) {
+        const float g = k::kv3_dot(ns, s.wi);
+        if (s.wi.z > 0) EXPECT_GT(g, 0.f);
+        else EXPECT_LT(g, 0.f);
+        sampled += s.weight.x;
+      }
+      // eval |wi.z| over the sphere, uniformly: the smooth lobes' albedo
+      const float z = 2 * rng.uniform() - 1, p = 6.2831853f * rng.uniform(), r = std::sqrt(1 - z * z);
+      const Vec3 wi = v3(r * std::cos(p), r * std::sin(p), z);
+      const float e = k::yarn_cycles_eval(t, wo, wi).x;
+      integral += 4 * M_PI * e;
+      if (e > 0 && k::yarn_cycles_sample_side_ok(ns, wo, wi, wi.z < 0) == 0.f) ++unreachable;
+    }
+    sampled /= n;
+    integral /= n;
+    std::printf("[cycles sampling side] surface normal %s the yarn's hemisphere: albedo sampled %.4f, eval's "
+                "integral %.4f, %d of %d uniform directions lit only through light sampling\n",
+                below ? "below" : "inside", sampled, integral, unreachable, n);
+    if (below) {
+      EXPECT_GT(unreachable, n / 50);
+      EXPECT_LT(sampled, integral - 0.02);
+    } else {
+      EXPECT_EQ(unreachable, 0);
+      EXPECT_NEAR(sampled, integral, 0.01);
+    }
+  }
+}
+
 k::KYarnBsdf random_yarn(Rng& rng) {
   auto pick = [&](float lo, float hi) {
     const float u = rng.uniform();
