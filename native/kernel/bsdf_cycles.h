@@ -107,6 +107,7 @@ KNIT_STRUCT(KYarnCycles)
   float alpha_x, alpha_y;
   float p0, p1, p2, p3;
   kvec3 ns; /* the mesh's smooth normal in this frame (yarn_cycles_with_base); 0: no side test */
+  int cycles4; /* 1: Cycles 4's rule for the GGX closure (yarn_cycles_as_cycles4) */
 KNIT_STRUCT_END(KYarnCycles)
 
 /* Cycles (4.2 and later) lets a closure whose normal n is not the mesh's
@@ -258,6 +259,7 @@ KNIT_FN KYarnCycles yarn_cycles_make(KNIT_IN(KYarnBsdf) p, kvec3 wo) {
   float fo, body, e_o, w0, w1, w2, w3, sum, inv, thin, share, rest;
   kvec3 mr, mt;
   c.ns = kv3(KF(0.0), KF(0.0), KF(0.0));
+  c.cycles4 = 0;
   c.alpha_x = k_fmax(p.spec_r.alpha_x, KB_ALPHA_MIN);
   c.alpha_y = k_fmax(p.spec_r.alpha_y, KB_ALPHA_MIN);
   c.w.spec = KF(0.0);
@@ -310,6 +312,27 @@ KNIT_FN KYarnCycles yarn_cycles_with_base(KNIT_IN(KYarnCycles) c_in, kvec3 ns_lo
   return c;
 }
 
+/* c as Cycles before 5.0 (Blender 4.x, the standalone Cycles 4.2) renders
+ * it: its GGX closure takes light from the viewer's side of the surface's
+ * normal whatever the closure normal's tilt (bsdf_microfacet_eval's test
+ * against sd->N), where Cycles 5 applies the side test of
+ * yarn_cycles_side_ok to it too; and where the side test drops a
+ * diffuse() or translucent() direction, Cycles 4 zeroes its value but keeps
+ * its density (in the mixture's pdf, for MIS and for the other closures'
+ * samples), where Cycles 5 drops both. diffuse() and translucent() take the
+ * side test in both (Cycles 4 through bump_shadowing_term, bump map
+ * correction off). Needs yarn_cycles_with_base. */
+KNIT_FN KYarnCycles yarn_cycles_as_cycles4(KNIT_IN(KYarnCycles) c_in) {
+  KYarnCycles c = c_in;
+  c.cycles4 = 1;
+  return c;
+}
+
+/* 1 when the GGX closure takes light from wi (reflection, local frame). */
+KNIT_FN float yarn_cycles_ggx_side_ok(KNIT_IN(KYarnCycles) c, kvec3 wo, kvec3 wi) {
+  return c.cycles4 != 0 ? yarn_cycles_sample_side_ok(c.ns, wo, wi, 0) : yarn_cycles_side_ok(c.ns, wi);
+}
+
 /* The closure weights for the view direction wo (local frame, either side):
  * what the OSL shader multiplies its four closures by. */
 KNIT_FN KCyclesLobes yarn_cycles_lobes(KNIT_IN(KYarnBsdf) p, kvec3 wo) {
@@ -324,11 +347,12 @@ KNIT_FN kvec3 yarn_cycles_eval(KNIT_IN(KYarnCycles) c, kvec3 wo, kvec3 wi) {
   kvec3 i = kb_flip_z(wi, s);
   kvec3 hs = kv3_add(o, i);
   float ggx = KF(0.0);
-  if (KZ(wo) * KZ(wi) == KF(0.0) || yarn_cycles_side_ok(c.ns, wi) == KF(0.0)) return KB_BLACK;
-  if (KZ(i) < KF(0.0)) return kv3_scale(c.w.body_t, -KZ(i) * K_INV_PI);
-  if (c.w.spec > KF(0.0) && kv3_len2(hs) > KF(0.0))
+  float ok = yarn_cycles_side_ok(c.ns, wi);
+  if (KZ(wo) * KZ(wi) == KF(0.0)) return KB_BLACK;
+  if (KZ(i) < KF(0.0)) return kv3_scale(c.w.body_t, ok * -KZ(i) * K_INV_PI);
+  if (c.w.spec > KF(0.0) && kv3_len2(hs) > KF(0.0) && yarn_cycles_ggx_side_ok(c, wo, wi) != KF(0.0))
     ggx = c.w.spec * mf_refl_core(c.alpha_x, c.alpha_y, o, i, kv3_normalize(hs)) * KZ(i);
-  return kv3_add(kv3(ggx, ggx, ggx), kv3_scale(c.w.body_r, KZ(i) * K_INV_PI));
+  return kv3_add(kv3(ggx, ggx, ggx), kv3_scale(c.w.body_r, ok * KZ(i) * K_INV_PI));
 }
 
 /* Solid-angle density of yarn_cycles_sample's smooth lobes. */
@@ -338,11 +362,14 @@ KNIT_FN float yarn_cycles_pdf(KNIT_IN(KYarnCycles) c, kvec3 wo, kvec3 wi) {
   kvec3 i = kb_flip_z(wi, s);
   kvec3 hs = kv3_add(o, i);
   float pg = KF(0.0);
-  if (KZ(wo) * KZ(wi) == KF(0.0) || yarn_cycles_side_ok(c.ns, wi) == KF(0.0)) return KF(0.0);
-  if (KZ(i) < KF(0.0)) return c.p2 * (-KZ(i)) * K_INV_PI;
-  if (c.p0 > KF(0.0) && kv3_len2(hs) > KF(0.0))
+  /* (Cycles 4 keeps the density of a diffuse() or translucent() direction
+   * its side test drops: bsdf_eval scales the value alone) */
+  float ok = c.cycles4 != 0 ? KF(1.0) : yarn_cycles_side_ok(c.ns, wi);
+  if (KZ(wo) * KZ(wi) == KF(0.0)) return KF(0.0);
+  if (KZ(i) < KF(0.0)) return ok * c.p2 * (-KZ(i)) * K_INV_PI;
+  if (c.p0 > KF(0.0) && kv3_len2(hs) > KF(0.0) && yarn_cycles_ggx_side_ok(c, wo, wi) != KF(0.0))
     pg = c.p0 * mf_refl_pdf_up(c.alpha_x, c.alpha_y, o, kv3_normalize(hs));
-  return pg + c.p1 * KZ(i) * K_INV_PI;
+  return pg + ok * c.p1 * KZ(i) * K_INV_PI;
 }
 
 /* Density of the smooth lobes given that the delta was not chosen. */

@@ -88,6 +88,7 @@ KnitModelMaterial::KnitModelMaterial(const KnitDesc& desc, std::shared_ptr<const
   footprint_scale_ = desc.footprint_scale;
   centre_at_pixel_ = desc.footprint_centre == FootprintCentre::Pixel;
   cycles_ = model_->params().bsdf_model == knit::KnitBsdfModel::Cycles;
+  cycles4_ = cycles_ && desc.cycles_version == 4;
   // A stretch worth a warning: over 1% of the UV area, or by 1.5 or more
   // anywhere. (A puffed cushion's corners, 0.1% of its UV area stretched by
   // at most 17%, do not show; a warning there only teaches users to ignore
@@ -206,6 +207,7 @@ PassThrough KnitModelMaterial::resolve(SurfaceInteraction& si, const RayDifferen
     si.yarn.cyc = knit::k::yarn_cycles_with_base(knit::k::yarn_cycles_make(si.yarn.bsdf,
                                                                            to_kvec(si.shading.to_local(-ray.d))),
                                                  to_kvec(si.shading.to_local(si.yarn.base.n)));
+    if (cycles4_) si.yarn.cyc = knit::k::yarn_cycles_as_cycles4(si.yarn.cyc);
     const float p3 = si.yarn.cyc.p3;
     if (p3 > 0) {
       if (sampler.get1d() < p3) {

@@ -114,6 +114,7 @@ class KnitModelMaterial final : public YarnShadedMaterial {
   float footprint_scale_ = 1;  // pixels
   bool centre_at_pixel_ = true;  // KnitDesc::footprint_centre
   bool cycles_ = false;          // bsdf_model Cycles
+  bool cycles4_ = false;         // and cycles_version 4 (yarn_cycles_as_cycles4)
 
   std::shared_ptr<const knit::KnitMaterial> model_;
   std::shared_ptr<const knit::KnitMaterial> point_model_;

@@ -221,6 +221,10 @@ KnitDesc parse_knit_material(JsonObject& o, const std::string& dir, bool class_t
           n->fail(std::string("true is not what bsdf_model \"cycles\" renders (") + why +
                   "): leave it out or set it false");
   }
+  if (auto v = o.get("cycles_version")) {
+    if (!cycles) v->fail("only bsdf_model \"cycles\" follows a Cycles version: leave it out or set bsdf_model");
+    k.cycles_version = static_cast<int>(o.integer("cycles_version", 4, 5, k.cycles_version));
+  }
   const std::string mode = o.choice("mode", {"near_field", "multi_scale"}, "near_field");
   mp.mode = mode == "near_field" ? knit::KnitMode::NearField : knit::KnitMode::MultiScale;
   mp.capm = o.boolean("capm", mp.capm);

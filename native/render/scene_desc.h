@@ -119,6 +119,10 @@ struct KnitDesc {
   // pixel is averaged once), or at the sample's own hit (the pixel is
   // averaged twice: by each box, then by the spread of the boxes).
   FootprintCentre footprint_centre = FootprintCentre::Pixel;
+  // bsdf_model "cycles": the Cycles whose closure rules it follows, 5 (5.0
+  // and later) or 4 (before 5.0: Blender 4.x, the standalone Cycles 4.2),
+  // which differ in the GGX closure's side test (yarn_cycles_as_cycles4).
+  int cycles_version = 5;
 
   // The colour a diffuse preview uses: the first yarn colour.
   Rgb base_color() const;

@@ -4,11 +4,13 @@ found: $KNIT_CYCLES (or $KNITSHADE_CYCLES), else `cycles` on PATH. Without
 one it says plainly that it did not run and exits 77.
 
     render_standalone.py --cli KNITSHADE --out DIR [--figures OUT.json]
+                         [--cycles-version 4|5]
 
 The flat swatch, the half cylinder and the sphere of comparison_scenes.py
 are exported with `knitshade export-cycles`, rendered by
 `cycles --shadingsys osl` and by `knitshade render` (their knit materials
-have "bsdf_model": "cycles"), each with seeds 1 and 2. From the four
+have "bsdf_model": "cycles" and the "cycles_version" of the app's
+`cycles --version`, or of --cycles-version), each with seeds 1 and 2. From the four
 renders (linear radiance):
 
 - noise: sqrt((RMSE(C1, C2)^2 + RMSE(N1, N2)^2) / 2), what RMSE(Ci, Nj)
@@ -54,6 +56,16 @@ def find_cycles():
                 return None
             return path
     return shutil.which("cycles")
+
+
+def cycles_major(cycles):
+    """4 for the Cycles before 5.0, 5 for 5.0 and later, from `cycles --version`."""
+    out = subprocess.run([cycles, "--version"], capture_output=True, text=True, timeout=60).stdout
+    m = re.match(r"\s*(\d+)\.", out)
+    if not m:
+        raise SystemExit(f"{cycles} --version printed {out.strip()!r}, not a version: "
+                         "name the Cycles with --cycles-version 4 or 5")
+    return 4 if int(m.group(1)) < 5 else 5
 
 
 def write_json(path, data):
@@ -145,17 +157,25 @@ def main():
     ap.add_argument("--cli", required=True)
     ap.add_argument("--out", required=True)
     ap.add_argument("--figures", help="render larger, write the figures to this JSON file, assert nothing")
+    ap.add_argument("--cycles-version", type=int, choices=(4, 5),
+                    help="the Cycles whose closure rules the native renders follow (default: the app's own)")
     a = ap.parse_args()
     cycles = find_cycles()
     if not cycles:
         print("No standalone Cycles found (set KNIT_CYCLES, or put `cycles` on PATH): "
               "the Cycles renders of exported scenes did NOT run.")
         return 77
+    if a.cycles_version is None:
+        a.cycles_version = cycles_major(cycles)
+    print(f"{cycles}: the native renders follow Cycles {a.cycles_version}'s closure rules", flush=True)
     os.makedirs(a.out, exist_ok=True)
     size, spp = (192, 64) if a.figures else (96, 16)
     timing_spp = 64
     results, failures = {}, []
     for name, scene in scenes(size, spp).items():
+        for m in scene["materials"].values():
+            if m.get("type") == "knit":
+                m["cycles_version"] = a.cycles_version
         c, n = [], []
         try:
             for seed in (1, 2):
@@ -193,6 +213,7 @@ def main():
             failures.append(name)
     if a.figures:
         write_json(a.figures, {"size": size, "spp": spp, "timing_spp": timing_spp, "cycles": cycles,
+                               "cycles_version": a.cycles_version,
                                "scenes": results})
     if failures:
         print(f"{len(failures)} scene(s) failed: {', '.join(failures)}; images in {a.out}")

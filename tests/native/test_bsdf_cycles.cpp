@@ -413,6 +413,69 @@ TEST(BsdfCycles, SamplingDropsWhatCyclesSamplersDrop) {
   }
 }
 
+// Cycles before 5.0 (yarn_cycles_as_cycles4): its GGX closure keeps light
+// on the viewer's side of the surface (the samplers' rule,
+// yarn_cycles_sample_side_ok) where Cycles 5 applies the side test; the
+// diffuse() and translucent() values take the side test in both, but Cycles
+// 4 keeps their density. Checked lobe by lobe against the closures without
+// a base, with the surface's normal inside and below the yarn's hemisphere.
+TEST(BsdfCycles, Cycles4GgxFollowsTheViewersSideAndKeepsTheDensity) {
+  const Vec3 white{1.f, 1.f, 1.f};
+  const k::KYarnBsdf yb = k::yarn_bsdf_make(k::bsdf_mf_make(0.2f, 0.4f, 1.55f), k::bsdf_mf_make(0.3f, 0.6f, 1.55f),
+                                            white, white, 0.8f, 0.6f, 1.f, k::bsdf_att_make(0.5f, 1));
+  const Vec3 wo = dir_deg(70.0, 0.0);
+  const k::KYarnCycles c = k::yarn_cycles_make(yb, wo);
+  ASSERT_GT(c.w.spec, 0.f);
+  ASSERT_GT(c.p1, 0.f);
+  // The lobes apart: GGX alone (no body), the body alone (no GGX).
+  auto ggx_only = [](k::KYarnCycles t) {
+    t.w.body_r = v3(0, 0, 0);
+    t.w.body_t = v3(0, 0, 0);
+    t.p1 = t.p2 = 0;
+    return t;
+  };
+  auto body_only = [](k::KYarnCycles t) {
+    t.w.spec = 0;
+    t.p0 = 0;
+    return t;
+  };
+  Rng rng(23);
+  for (const Vec3 ns_in : {v3(0.6f, 0.1f, 0.4f), v3(0.9f, 0.f, -0.3f)}) {
+    const Vec3 ns = k::kv3_normalize(ns_in);
+    ASSERT_GT(k::kv3_dot(ns, wo), 0.f);
+    const k::KYarnCycles v5 = k::yarn_cycles_with_base(c, ns), v4 = k::yarn_cycles_as_cycles4(v5);
+    int ggx_differs = 0, body_kept = 0;
+    for (int i = 0; i < 20000; ++i) {
+      const Vec3 wi = uniform_sphere(rng);
+      const bool refl = wi.z * wo.z > 0;
+      const float side = k::yarn_cycles_side_ok(ns, wi), samp = k::yarn_cycles_sample_side_ok(ns, wo, wi, 0);
+      const float g = k::yarn_cycles_eval(ggx_only(c), wo, wi).x, gp = k::yarn_cycles_pdf(ggx_only(c), wo, wi);
+      const float b = k::yarn_cycles_eval(body_only(c), wo, wi).x, bp = k::yarn_cycles_pdf(body_only(c), wo, wi);
+      // GGX: the viewer's side in 4, the side test in 5.
+      EXPECT_EQ(k::yarn_cycles_eval(ggx_only(v4), wo, wi).x, refl ? g * samp : 0.f);
+      EXPECT_EQ(k::yarn_cycles_eval(ggx_only(v5), wo, wi).x, g * side);
+      EXPECT_EQ(k::yarn_cycles_pdf(ggx_only(v4), wo, wi), refl ? gp * samp : 0.f);
+      EXPECT_EQ(k::yarn_cycles_pdf(ggx_only(v5), wo, wi), gp * side);
+      if (refl && g > 0 && side != samp) ++ggx_differs;
+      // Body: the side test's value in both; the density kept in 4.
+      EXPECT_EQ(k::yarn_cycles_eval(body_only(v4), wo, wi).x, b * side);
+      EXPECT_EQ(k::yarn_cycles_eval(body_only(v5), wo, wi).x, b * side);
+      EXPECT_EQ(k::yarn_cycles_pdf(body_only(v4), wo, wi), bp);
+      EXPECT_EQ(k::yarn_cycles_pdf(body_only(v5), wo, wi), bp * side);
+      if (bp > 0 && side == 0) ++body_kept;
+    }
+    std::printf("[cycles 4] surface normal %s the yarn's hemisphere: %d of 20000 directions where 4's GGX and "
+                "5's differ, %d with the body's density kept\n",
+                ns.z < 0 ? "below" : "inside", ggx_differs, body_kept);
+    // The two rules agree while the surface's normal is inside the yarn's
+    // hemisphere (on the viewer's side the side test passes); below it,
+    // they part.
+    if (ns.z > 0) EXPECT_EQ(ggx_differs, 0);
+    else EXPECT_GT(ggx_differs, 1000);
+    EXPECT_GT(body_kept, 1000);
+  }
+}
+
 k::KYarnBsdf random_yarn(Rng& rng) {
   auto pick = [&](float lo, float hi) {
     const float u = rng.uniform();

@@ -50,6 +50,12 @@ from comparison_scenes import scenes as comparison_scenes  # noqa: E402
 def scenes(size, spp):
     """The flat swatch and the half cylinder of tests/cycles/comparison_scenes.py."""
     all_scenes = comparison_scenes(size, spp)
+    # the native renders follow this Blender's Cycles' closure rules
+    version = 4 if bpy.app.version[0] < 5 else 5
+    for s in all_scenes.values():
+        for m in s["materials"].values():
+            if m.get("type") == "knit":
+                m["cycles_version"] = version
     return {name: all_scenes[name] for name in ("swatch", "half_cylinder")}
 
 

@@ -437,6 +437,26 @@ TEST(SceneParse, KnitBsdfModel) {
               std::string::npos)
         << e;
   }
+  // The Cycles whose rules it follows: 5 unless told 4; nothing else, and
+  // only with bsdf_model "cycles".
+  EXPECT_EQ(k.cycles_version, 5);
+  j["materials"]["wool"]["cycles_version"] = 4;
+  EXPECT_EQ(parse(j).materials[1].knit.cycles_version, 4);
+  for (int v : {3, 6}) {
+    json b = j;
+    b["materials"]["wool"]["cycles_version"] = v;
+    const std::string e = error_of(b);
+    EXPECT_NE(e.find("scene.json: materials.wool.cycles_version"), std::string::npos) << e;
+  }
+  {
+    json b = j;
+    b["materials"]["wool"].erase("bsdf_model");
+    const std::string e = error_of(b);
+    EXPECT_NE(e.find("materials.wool.cycles_version: only bsdf_model \"cycles\" follows a Cycles version"),
+              std::string::npos)
+        << e;
+  }
+  j["materials"]["wool"].erase("cycles_version");
   j["materials"]["wool"]["bsdf_model"] = "osl";
   EXPECT_NE(error_of(j).find("materials.wool.bsdf_model: must be one of \"exact\", \"cycles\""), std::string::npos)
       << error_of(j);
