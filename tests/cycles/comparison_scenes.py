@@ -1,7 +1,10 @@
 """The scenes on which a Cycles render of the knit shader is compared with
 the native renderer's model of it (a knit material's "bsdf_model":
-"cycles"): a flat two-colour swatch with see-through holes, a half
-cylinder and a sphere, each lit by a sun and a sky. Shared by
+"cycles"): a flat two-colour swatch with see-through holes, the same
+swatch over a white floor (seen through the holes, lit by the sun through
+the fabric: shadow rays that cross the knit from behind), a half cylinder
+and a sphere (whose inside shows through the holes), each lit by a sun and
+a sky. Shared by
 tests/osl/native_vs_cycles.py (Cycles inside Blender, through the add-on)
 and tests/cycles/render_standalone.py (the standalone Cycles app, through
 `knitshade export-cycles`), so both compare the same thing.
@@ -38,12 +41,25 @@ def _scene(size, spp, camera, mesh, material, name):
             "objects": [{"name": name, "mesh": os.path.join(MESHES, mesh), "material": "wool"}]}
 
 
+def _with_floor(scene):
+    """scene with a white diffuse floor 0.1 under its first object (z = 0)."""
+    scene["materials"]["floor"] = {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}
+    scene["objects"].append({"name": "floor", "mesh": os.path.join(MESHES, "quad.obj"), "material": "floor",
+                             "transform": {"translate": [0.0, 0.0, -0.1], "scale": 2.0}})
+    return scene
+
+
 def scenes(size, spp):
     two_colours = [[0.72, 0.30, 0.16], [0.85, 0.80, 0.70]]
     return {
         "swatch": _scene(size, spp,
                          {"position": [0.0, -0.28, 0.36], "look_at": [0.0, 0.0, 0.0], "up": [0, 1, 0], "fov": 40},
                          "quad.obj", _wool("diamond_blocks_2colour.knit", 60, two_colours), "swatch"),
+        "swatch_floor": _with_floor(_scene(size, spp,
+                                           {"position": [0.0, -0.28, 0.36], "look_at": [0.0, 0.0, 0.0],
+                                            "up": [0, 1, 0], "fov": 40},
+                                           "quad.obj", _wool("diamond_blocks_2colour.knit", 60, two_colours),
+                                           "swatch")),
         "half_cylinder": _scene(size, spp,
                                 {"position": [0.0, -1.3, 3.3], "look_at": [0.0, 0.0, 0.45], "up": [0, 1, 0],
                                  "fov": 42},

@@ -1,9 +1,9 @@
 """The knit shader in Blender's Cycles against the native renderer rendering
 the model as Cycles does (a knit material's "bsdf_model": "cycles",
-docs/cycles.md): the flat swatch and the half cylinder of
-tests/cycles/comparison_scenes.py, built once as native scene JSON and once
-in Blender through the add-on's API (the material a user gets), rendered
-with two seeds each; the Cycles image must match the native one within the
+docs/cycles.md): the flat swatch, the swatch over a floor lit through it
+and the half cylinder of tests/cycles/comparison_scenes.py, built once as
+native scene JSON and once in Blender through the add-on's API (the
+material a user gets), rendered with two seeds each; the Cycles image must match the native one within the
 noise of the two.
 
 Run with the Python that has PyPI's bpy (KNIT_BPY_PYTHON); the native CLI
@@ -48,7 +48,8 @@ from comparison_scenes import scenes as comparison_scenes  # noqa: E402
 
 
 def scenes(size, spp):
-    """The flat swatch and the half cylinder of tests/cycles/comparison_scenes.py."""
+    """The flat swatch, the swatch over a floor and the half cylinder of
+    tests/cycles/comparison_scenes.py."""
     all_scenes = comparison_scenes(size, spp)
     # the native renders follow this Blender's Cycles' closure rules
     version = 4 if bpy.app.version[0] < 5 else 5
@@ -56,7 +57,7 @@ def scenes(size, spp):
         for m in s["materials"].values():
             if m.get("type") == "knit":
                 m["cycles_version"] = version
-    return {name: all_scenes[name] for name in ("swatch", "half_cylinder")}
+    return {name: all_scenes[name] for name in ("swatch", "swatch_floor", "half_cylinder")}
 
 
 # ---- native ----------------------------------------------------------------
@@ -154,7 +155,23 @@ def build_blender(scene):
     for ob_d in scene["objects"]:
         bpy.ops.wm.obj_import(filepath=ob_d["mesh"], forward_axis="Y", up_axis="Z")
         ob = bpy.context.selected_objects[0]
+        tf = ob_d.get("transform", {})
+        if set(tf) - {"translate", "scale"}:
+            raise ValueError(f"transform keys {sorted(tf)} are not translated")
+        ob.scale = (tf.get("scale", 1.0),) * 3
+        ob.location = tf.get("translate", (0.0, 0.0, 0.0))
         m = scene["materials"][ob_d["material"]]
+        if m["type"] == "diffuse":
+            mat = bpy.data.materials.new(ob_d["material"])
+            mat.use_nodes = True
+            bsdf = mat.node_tree.nodes.new("ShaderNodeBsdfDiffuse")
+            bsdf.inputs["Color"].default_value = tuple(m["albedo"]) + (1.0,)
+            bsdf.inputs["Roughness"].default_value = 0.0
+            out = next(n for n in mat.node_tree.nodes if n.type == "OUTPUT_MATERIAL")
+            mat.node_tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+            ob.data.materials.clear()
+            ob.data.materials.append(mat)
+            continue
         pattern = kpattern.load(m["pattern"])
         params = {"uv_scale": m["uv_scale"], "a": m.get("a", 1.5), "h": m.get("h", 4.0), "d": m.get("d", 1.0),
                   "r": m.get("r", 0.65), "body_energy": m["bsdf"]["body_energy"],
