@@ -6,12 +6,13 @@ one it says plainly that it did not run and exits 77.
     render_standalone.py --cli KNITSHADE --out DIR [--figures OUT.json]
                          [--cycles-version 4|5]
 
-The flat swatch, the half cylinder and the sphere of comparison_scenes.py
-are exported with `knitshade export-cycles`, rendered by
-`cycles --shadingsys osl` and by `knitshade render` (their knit materials
-have "bsdf_model": "cycles" and the "cycles_version" of the app's
-`cycles --version`, or of --cycles-version), each with seeds 1 and 2. From the four
-renders (linear radiance):
+The scenes of comparison_scenes.py (the flat swatch, the swatch over a
+floor, the half cylinder and the sphere) are exported with `knitshade
+export-cycles`, rendered by `cycles --shadingsys osl` and by `knitshade
+render` (their knit materials have "bsdf_model": "cycles" and the
+"cycles_version" of the app's `cycles --version`, or of
+--cycles-version), each with seeds 1 and 2. From the four renders (linear
+radiance):
 
 - noise: sqrt((RMSE(C1, C2)^2 + RMSE(N1, N2)^2) / 2), what RMSE(Ci, Nj)
   would be were the two renderers' expectations equal;
