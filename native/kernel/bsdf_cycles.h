@@ -419,6 +419,24 @@ KNIT_FN KBsdfSample yarn_cycles_sample_in(KNIT_IN(KYarnCycles) c, kvec3 wo, floa
     s = kb_sample_make(kb_flip_z(d, k == 1 ? side : -side), KB_BLACK, KF(1.0), k == 1 ? KB_REFLECT : KB_TRANSMIT);
   }
   if (yarn_cycles_sample_side_ok(c.ns, wo, s.wi, k == 2) == KF(0.0)) return kb_sample_fail(wo);
+  if (c.cycles4 == 0 && yarn_cycles_side_ok(c.ns, s.wi) == KF(0.0)) {
+    /* Cycles 5 applies the side test to a drawn direction through
+     * bump_shadowing_term, which zeroes the drawn closure's value only when
+     * it is diffuse() or translucent() and keeps its density; the other
+     * closures, evaluated there, give it neither. So the drawn closure
+     * alone counts, without the test, and a GGX draw keeps its value. */
+    KYarnCycles own = c;
+    own.ns = kv3(KF(0.0), KF(0.0), KF(0.0));
+    own.p0 = k == 0 ? c.p0 : KF(0.0);
+    own.p1 = k == 1 ? c.p1 : KF(0.0);
+    own.p2 = k == 2 ? c.p2 : KF(0.0);
+    own.w.body_r = KB_BLACK;
+    own.w.body_t = KB_BLACK;
+    if (k != 0) own.w.spec = KF(0.0);
+    pdf = yarn_cycles_pdf(own, wo, s.wi) / total;
+    if (!(pdf > KF(0.0))) return kb_sample_fail(wo);
+    return kb_sample_make(s.wi, kv3_scale(yarn_cycles_eval(own, wo, s.wi), KF(1.0) / pdf), pdf, s.flags);
+  }
   pdf = yarn_cycles_pdf(c, wo, s.wi) / total;
   if (!(pdf > KF(0.0))) return kb_sample_fail(wo);
   return kb_sample_make(s.wi, kv3_scale(yarn_cycles_eval(c, wo, s.wi), KF(1.0) / pdf), pdf, s.flags);

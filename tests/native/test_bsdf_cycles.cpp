@@ -476,6 +476,48 @@ TEST(BsdfCycles, Cycles4GgxFollowsTheViewersSideAndKeepsTheDensity) {
   }
 }
 
+// Cycles 5 (the default): a drawn direction that the side test drops keeps
+// its own closure's density, and its value when that closure is the GGX
+// one (bump_shadowing_term zeroes a drawn diffuse() or translucent() alone);
+// the other closures give it nothing.
+TEST(BsdfCycles, Cycles5DrawnGgxSkipsTheSideTest) {
+  const Vec3 white{1.f, 1.f, 1.f};
+  const k::KYarnBsdf yb = k::yarn_bsdf_make(k::bsdf_mf_make(0.2f, 0.4f, 1.55f), k::bsdf_mf_make(0.3f, 0.6f, 1.55f),
+                                            white, white, 0.8f, 0.6f, 1.f, k::bsdf_att_make(0.5f, 1));
+  const Vec3 wo = dir_deg(70.0, 0.0);
+  const k::KYarnCycles c = k::yarn_cycles_make(yb, wo);
+  const Vec3 ns = k::kv3_normalize(v3(0.9f, 0.f, -0.3f));  // below the yarn's hemisphere
+  const k::KYarnCycles v5 = k::yarn_cycles_with_base(c, ns);
+  const float total = c.p0 + c.p1 + c.p2 + c.p3;
+  Rng rng(31);
+  int ggx = 0, body = 0;
+  for (int i = 0; i < 100000; ++i) {
+    const float u1 = rng.uniform(), u2 = rng.uniform();
+    const k::KBsdfSample s = k::yarn_cycles_sample(v5, wo, u1, u2);
+    if (!(s.pdf > 0) || k::kb_has_flag(s.flags, KB_DELTA) || k::yarn_cycles_side_ok(ns, s.wi) != 0.f) continue;
+    // The closures alone, without the side test.
+    k::KYarnCycles g = c, d = c;
+    g.p1 = g.p2 = 0;
+    g.w.body_r = g.w.body_t = v3(0, 0, 0);
+    d.p0 = 0;
+    d.w.spec = 0;
+    (s.wi.z > 0 ? d.p2 : d.p1) = 0;
+    const float pg = k::yarn_cycles_pdf(g, wo, s.wi) / total, pd = k::yarn_cycles_pdf(d, wo, s.wi) / total;
+    if (std::fabs(s.pdf - pg) <= 1e-5f * pg) {
+      ++ggx;
+      EXPECT_NEAR(s.weight.x * s.pdf, k::yarn_cycles_eval(g, wo, s.wi).x, 1e-4f * k::yarn_cycles_eval(g, wo, s.wi).x);
+      EXPECT_GT(s.weight.x, 0.f);
+    } else {
+      ++body;
+      EXPECT_NEAR(s.pdf, pd, 1e-5f * pd);
+      EXPECT_EQ(s.weight.x, 0.f);
+    }
+  }
+  std::printf("[cycles 5 draws] %d GGX and %d diffuse/translucent draws the side test drops\n", ggx, body);
+  EXPECT_GT(ggx, 100);
+  EXPECT_GT(body, 100);
+}
+
 k::KYarnBsdf random_yarn(Rng& rng) {
   auto pick = [&](float lo, float hi) {
     const float u = rng.uniform();
