@@ -198,7 +198,7 @@ def start(mat, size=kswatch.SIZE, spp=kswatch.SPP):
     st.dir = tempfile.mkdtemp(prefix="knitshade-preview-")
     scene_path = os.path.join(st.dir, "swatch.json")
     with open(scene_path, "w", encoding="utf-8") as f:
-        f.write(kswatch.scene_text(values, pat, _mesh_file(), size, spp))
+        f.write(kswatch.scene_text(values, pat, _mesh_file(), size, spp, cycles_version()))
     st.key = kswatch.settings_key(values, pat, size, spp)
     exr = os.path.join(st.dir, "swatch.exr")
     cmd = [cli, "render", scene_path, "-o", exr, "--quiet", "--no-cache"]
@@ -471,7 +471,13 @@ def unregister():
         _previews = None
 
 
+def cycles_version():
+    """4 for this Blender's Cycles before 5.0, 5 from 5.0 on: the closure
+    rules the native swatch render follows (docs/scene-format.md)."""
+    return 4 if tuple(bpy.app.version) < (5, 0, 0) else 5
+
+
 def scene_json_for(mat):
     """The swatch scene file's text for a material (for scripts and tests)."""
     values, pat = material_values(mat)
-    return json.loads(kswatch.scene_text(values, pat, "patch.obj"))
+    return json.loads(kswatch.scene_text(values, pat, "patch.obj", cycles_version=cycles_version()))

@@ -82,6 +82,7 @@ def main():
     T.check(np.allclose(km["yarn_colors"], [(0.7, 0.1, 0.08), (0.85, 0.8, 0.7)], atol=1e-6), "yarn colours")
     T.check(abs(km["a"] - 1.4) < 1e-6 and abs(km["r"] - 0.7) < 1e-6, "a, r: %r, %r" % (km["a"], km["r"]))
     T.equal(km["bsdf_model"], "cycles", "bsdf_model")
+    T.equal(km["cycles_version"], 4 if bpy.app.version[0] < 5 else 5, "the Cycles whose rules the swatch follows")
     img = bpy.data.images.get(pv.IMAGE_PREFIX + mat.name)
     T.check(img is not None and tuple(img.size) == (192, 192), "the preview image datablock")
     a = pixels(img)

@@ -9,7 +9,8 @@ the holes between the stitches. The material's UV scale is not used: the
 swatch shows a fixed number of stitches across (stitches_across()), so
 the preview shows the stitch and its colours whatever the mesh's size.
 The knit material is rendered with "bsdf_model": "cycles", what the OSL
-shader renders in Cycles.
+shader renders in Cycles (with the closure rules of the caller's Cycles,
+"cycles_version").
 """
 import hashlib
 import json
@@ -67,10 +68,11 @@ def _rgb(c):
     return [round(float(x), 6) for x in tuple(c)[:3]]
 
 
-def knit_material(values, pattern):
+def knit_material(values, pattern, cycles_version=5):
     """The scene file's knit material for a Knit Fabric's settings
     (`values`: {shader parameter name: value}, as nodes.get_value gives
-    them) and pattern (a core.pattern.Pattern)."""
+    them) and pattern (a core.pattern.Pattern), rendered as the Cycles of
+    `cycles_version` (4: before Blender 5.0, 5: 5.0 and later) renders it."""
     g = values.get
     n = stitches_across(pattern.cols)
     palette = [_rgb(g("Yarn%d" % i, (0.5, 0.5, 0.5))) for i in range(8)]
@@ -98,6 +100,7 @@ def knit_material(values, pattern):
         "footprint_points": int(g("FootprintPoints", 4)),
         "capm_options": {"max_steps": int(g("CapmSteps", 32))},
         "bsdf_model": "cycles",
+        "cycles_version": int(cycles_version),
     }
     if pattern.has_colors:
         rows = pattern.color_rows()
@@ -106,7 +109,7 @@ def knit_material(values, pattern):
     return mat
 
 
-def scene(values, pattern, mesh_file, size=SIZE, spp=SPP):
+def scene(values, pattern, mesh_file, size=SIZE, spp=SPP, cycles_version=5):
     """The whole scene file (a dict) of the swatch."""
     return {
         "version": 1,
@@ -120,13 +123,13 @@ def scene(values, pattern, mesh_file, size=SIZE, spp=SPP):
             {"type": "quad", "corner": [-0.6, -0.6, -1.4], "edge_u": [1.2, 0.0, 0.0], "edge_v": [0.0, 1.2, 0.0],
              "emission": [1.2, 1.25, 1.35]},
         ],
-        "materials": {"knit": knit_material(values, pattern)},
+        "materials": {"knit": knit_material(values, pattern, cycles_version)},
         "objects": [{"name": "swatch", "mesh": mesh_file, "material": "knit"}],
     }
 
 
-def scene_text(values, pattern, mesh_file, size=SIZE, spp=SPP):
-    return json.dumps(scene(values, pattern, mesh_file, size, spp), indent=1, sort_keys=True)
+def scene_text(values, pattern, mesh_file, size=SIZE, spp=SPP, cycles_version=5):
+    return json.dumps(scene(values, pattern, mesh_file, size, spp, cycles_version), indent=1, sort_keys=True)
 
 
 def settings_key(values, pattern, size=SIZE, spp=SPP):
