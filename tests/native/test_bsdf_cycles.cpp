@@ -313,14 +313,20 @@ TEST(BsdfCycles, WhiteFurnaceAlbedoNeverExceedsOne) {
   std::printf("[cycles furnace] max directional albedo %.4f at %s\n", worst, at.c_str());
 }
 
+// The yarn of the side-test checks below: rough, white, translucent, one
+// layer.
+k::KYarnBsdf side_test_yarn() {
+  const Vec3 white{1.f, 1.f, 1.f};
+  return k::yarn_bsdf_make(k::bsdf_mf_make(0.2f, 0.4f, 1.55f), k::bsdf_mf_make(0.3f, 0.6f, 1.55f), white, white,
+                           0.8f, 0.6f, 1.f, k::bsdf_att_make(0.5f, 1));
+}
+
 // Cycles' side test (yarn_cycles_side_ok): with the mesh's normal along the
 // yarn's, nothing is dropped; tilted, eval and pdf are exactly zero for the
 // directions (ns.wi)(ns.n)(n.wi) < 0 and unchanged elsewhere, sampling never
 // returns a dropped direction, and the albedo only falls.
 TEST(BsdfCycles, SideTestDropsWhatCyclesDropsAndNothingElse) {
-  const Vec3 white{1.f, 1.f, 1.f};
-  const k::KYarnBsdf yb = k::yarn_bsdf_make(k::bsdf_mf_make(0.2f, 0.4f, 1.55f), k::bsdf_mf_make(0.3f, 0.6f, 1.55f),
-                                            white, white, 0.8f, 0.6f, 1.f, k::bsdf_att_make(0.5f, 1));
+  const k::KYarnBsdf yb = side_test_yarn();
   const Vec3 wo = dir_deg(35.0, 10.0);
   const k::KYarnCycles c = k::yarn_cycles_make(yb, wo);
   const k::KYarnCycles same = k::yarn_cycles_with_base(c, v3(0.f, 0.f, 1.f));
@@ -369,9 +375,7 @@ TEST(BsdfCycles, SideTestDropsWhatCyclesDropsAndNothingElse) {
 // Cycles renders it under a sky; with the surface's normal above the
 // yarn's hemisphere the two agree.
 TEST(BsdfCycles, SamplingDropsWhatCyclesSamplersDrop) {
-  const Vec3 white{1.f, 1.f, 1.f};
-  const k::KYarnBsdf yb = k::yarn_bsdf_make(k::bsdf_mf_make(0.2f, 0.4f, 1.55f), k::bsdf_mf_make(0.3f, 0.6f, 1.55f),
-                                            white, white, 0.8f, 0.6f, 1.f, k::bsdf_att_make(0.5f, 1));
+  const k::KYarnBsdf yb = side_test_yarn();
   const Vec3 wo = dir_deg(70.0, 0.0);
   const k::KYarnCycles c = k::yarn_cycles_make(yb, wo);
   Rng rng(11);
@@ -420,9 +424,7 @@ TEST(BsdfCycles, SamplingDropsWhatCyclesSamplersDrop) {
 // 4 keeps their density. Checked lobe by lobe against the closures without
 // a base, with the surface's normal inside and below the yarn's hemisphere.
 TEST(BsdfCycles, Cycles4GgxFollowsTheViewersSideAndKeepsTheDensity) {
-  const Vec3 white{1.f, 1.f, 1.f};
-  const k::KYarnBsdf yb = k::yarn_bsdf_make(k::bsdf_mf_make(0.2f, 0.4f, 1.55f), k::bsdf_mf_make(0.3f, 0.6f, 1.55f),
-                                            white, white, 0.8f, 0.6f, 1.f, k::bsdf_att_make(0.5f, 1));
+  const k::KYarnBsdf yb = side_test_yarn();
   const Vec3 wo = dir_deg(70.0, 0.0);
   const k::KYarnCycles c = k::yarn_cycles_make(yb, wo);
   ASSERT_GT(c.w.spec, 0.f);
@@ -481,9 +483,7 @@ TEST(BsdfCycles, Cycles4GgxFollowsTheViewersSideAndKeepsTheDensity) {
 // one (bump_shadowing_term zeroes a drawn diffuse() or translucent() alone);
 // the other closures give it nothing.
 TEST(BsdfCycles, Cycles5DrawnGgxSkipsTheSideTest) {
-  const Vec3 white{1.f, 1.f, 1.f};
-  const k::KYarnBsdf yb = k::yarn_bsdf_make(k::bsdf_mf_make(0.2f, 0.4f, 1.55f), k::bsdf_mf_make(0.3f, 0.6f, 1.55f),
-                                            white, white, 0.8f, 0.6f, 1.f, k::bsdf_att_make(0.5f, 1));
+  const k::KYarnBsdf yb = side_test_yarn();
   const Vec3 wo = dir_deg(70.0, 0.0);
   const k::KYarnCycles c = k::yarn_cycles_make(yb, wo);
   const Vec3 ns = k::kv3_normalize(v3(0.9f, 0.f, -0.3f));  // below the yarn's hemisphere
