@@ -49,17 +49,14 @@ def _with_floor(scene):
     return scene
 
 
-def scenes(size, spp):
+def scenes(size, spp, cycles_version=5):
+    """The scenes, their knit materials following the closure rules of
+    Cycles `cycles_version` (4: before 5.0, 5: 5.0 and later)."""
     two_colours = [[0.72, 0.30, 0.16], [0.85, 0.80, 0.70]]
-    return {
+    out = {
         "swatch": _scene(size, spp,
                          {"position": [0.0, -0.28, 0.36], "look_at": [0.0, 0.0, 0.0], "up": [0, 1, 0], "fov": 40},
                          "quad.obj", _wool("diamond_blocks_2colour.knit", 60, two_colours), "swatch"),
-        "swatch_floor": _with_floor(_scene(size, spp,
-                                           {"position": [0.0, -0.28, 0.36], "look_at": [0.0, 0.0, 0.0],
-                                            "up": [0, 1, 0], "fov": 40},
-                                           "quad.obj", _wool("diamond_blocks_2colour.knit", 60, two_colours),
-                                           "swatch")),
         "half_cylinder": _scene(size, spp,
                                 {"position": [0.0, -1.3, 3.3], "look_at": [0.0, 0.0, 0.45], "up": [0, 1, 0],
                                  "fov": 42},
@@ -69,6 +66,11 @@ def scenes(size, spp):
                          {"position": [0.0, 0.4, 3.4], "look_at": [0.0, 0.0, 0.0], "up": [0, 1, 0], "fov": 40},
                          "sphere.obj", _wool("stripes_two_colour.knit", 240, two_colours, r=0.55), "sphere"),
     }
+    out["swatch_floor"] = _with_floor(copy.deepcopy(out["swatch"]))
+    for scene in out.values():
+        scene["materials"]["wool"]["cycles_version"] = int(cycles_version)
+    order = ("swatch", "swatch_floor", "half_cylinder", "sphere")
+    return {name: out[name] for name in order}
 
 
 def diffuse_twin(scene):

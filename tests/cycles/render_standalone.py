@@ -173,10 +173,7 @@ def main():
     size, spp = (192, 64) if a.figures else (96, 16)
     timing_spp = 64
     results, failures = {}, []
-    for name, scene in scenes(size, spp).items():
-        for m in scene["materials"].values():
-            if m.get("type") == "knit":
-                m["cycles_version"] = a.cycles_version
+    for name, scene in scenes(size, spp, a.cycles_version).items():
         c, n = [], []
         try:
             for seed in (1, 2):

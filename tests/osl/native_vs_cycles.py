@@ -3,8 +3,8 @@ the model as Cycles does (a knit material's "bsdf_model": "cycles",
 docs/cycles.md): the flat swatch, the swatch over a floor lit through it
 and the half cylinder of tests/cycles/comparison_scenes.py, built once as
 native scene JSON and once in Blender through the add-on's API (the
-material a user gets), rendered with two seeds each; the Cycles image must match the native one within the
-noise of the two.
+material a user gets), rendered with two seeds each; the Cycles image must
+match the native one within the noise of the two.
 
 Run with the Python that has PyPI's bpy (KNIT_BPY_PYTHON); the native CLI
 from KNIT_CLI. `--figures OUT.json` renders larger and writes the figures
@@ -36,7 +36,7 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.join(ROOT, "addon"))
 import knitshade_blender  # noqa: E402
-from knitshade_blender import api  # noqa: E402
+from knitshade_blender import api, preview  # noqa: E402
 from knitshade_blender.core import pattern as kpattern  # noqa: E402
 
 CLI = os.environ.get("KNIT_CLI", os.path.join(ROOT, "build", "knitshade"))
@@ -49,14 +49,9 @@ from comparison_scenes import scenes as comparison_scenes  # noqa: E402
 
 def scenes(size, spp):
     """The flat swatch, the swatch over a floor and the half cylinder of
-    tests/cycles/comparison_scenes.py."""
-    all_scenes = comparison_scenes(size, spp)
-    # the native renders follow this Blender's Cycles' closure rules
-    version = 4 if bpy.app.version[0] < 5 else 5
-    for s in all_scenes.values():
-        for m in s["materials"].values():
-            if m.get("type") == "knit":
-                m["cycles_version"] = version
+    tests/cycles/comparison_scenes.py, rendered natively with the closure
+    rules of this Blender's Cycles (the swatch preview's choice)."""
+    all_scenes = comparison_scenes(size, spp, preview.cycles_version())
     return {name: all_scenes[name] for name in ("swatch", "swatch_floor", "half_cylinder")}
 
 
